@@ -28,7 +28,7 @@ try:
     from petsc4py import PETSc
 
     import dolfinx
-    import dolfinx.fem.petsc  # noqa: F401
+    import dolfinx.fem.petsc
     import ufl
 except ImportError as err:  # pragma: no cover - depends on the machine
     raise ImportError(

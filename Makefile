@@ -1,0 +1,54 @@
+# fenics-garment: the two commands of the README are `make demo` and `make test`.
+# Both create .venv on first use (with a Python >= 3.12 found by .ci/find-python) and install the
+# package editable; re-running them does not reinstall what is already there.
+
+VENV      := .venv
+PY        := $(VENV)/bin/python
+MPIEXEC   := $(VENV)/bin/mpiexec
+STAMP     := $(VENV)/.installed-stamp
+NP        ?= 2
+PYTEST    := $(PY) -m pytest
+
+.PHONY: demo test test-serial test-mpi lint bench docker-check clean-venv help
+
+help:
+	@echo "make demo          run the main demo (creates .venv on first use)"
+	@echo "make test          run the test suite: serial, then the mpi-marked subset on $(NP) ranks"
+	@echo "make lint          ruff check + format check"
+	@echo "make bench         run the benchmark suite (writes benchmarks/results/)"
+	@echo "make docker-check  build the Docker image locally and run the tests inside it"
+
+$(PY):
+	@set -e; py=$$(./.ci/find-python); \
+	echo "Creating $(VENV) with $$py"; \
+	"$$py" -m venv $(VENV)
+
+# Re-install only when the package metadata changes.
+$(STAMP): pyproject.toml | $(PY)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e ".[dev,plot]"
+	@touch $(STAMP)
+
+demo: $(STAMP)
+	$(VENV)/bin/fenics-garment demo
+
+test: test-serial test-mpi
+
+test-serial: $(STAMP)
+	$(PYTEST) -m "not mpi" tests
+
+test-mpi: $(STAMP)
+	$(MPIEXEC) -n $(NP) $(PY) -m pytest -m mpi -p no:cacheprovider tests
+
+lint: $(STAMP)
+	$(VENV)/bin/ruff check .
+	$(VENV)/bin/ruff format --check .
+
+bench: $(STAMP)
+	$(PY) -m benchmarks
+
+docker-check:
+	bash .ci/docker-check
+
+clean-venv:
+	rm -rf $(VENV)
