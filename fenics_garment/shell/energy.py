@@ -1,0 +1,132 @@
+r"""The shell's energy as a sum of named terms, each a short function returning UFL.
+
+Densities are per unit *reference* area. With the stiffness resultants of
+:mod:`fenics_garment.materials` (local frame e₁ = warp, e₂ = weft):
+
+.. math::
+    \psi_m = \tfrac12 (A_{11}\varepsilon_{11}^2 + 2A_{12}\varepsilon_{11}\varepsilon_{22}
+             + A_{22}\varepsilon_{22}^2 + 4A_{66}\varepsilon_{12}^2) \\
+    \psi_b = \tfrac12 (D_{11}\kappa_{11}^2 + 2D_{12}\kappa_{11}\kappa_{22}
+             + D_{22}\kappa_{22}^2 + 4D_{66}\kappa_{12}^2) \\
+    \psi_s = \tfrac12 (S_1\gamma_1^2 + S_2\gamma_2^2), \qquad
+    \psi_d = \tfrac12 k_d\, \delta^2 .
+
+To replace a term, write a function with the same signature and pass it to
+:class:`fenics_garment.shell.model.ShellModel` (``replace(model, membrane=my_membrane)``).
+External work terms return the work of the loads on u; a follower pressure is not conservative
+and is returned as a residual contribution instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from fenics_garment._stack import dolfinx, ufl
+from fenics_garment.materials import ShellStiffness
+from fenics_garment.shell.kinematics import ShellKinematics
+
+
+@dataclass(frozen=True)
+class StiffnessConstants:
+    """Stiffness resultants as ``fem.Constant`` s: changing a value does not recompile a form."""
+
+    A11: dolfinx.fem.Constant
+    A22: dolfinx.fem.Constant
+    A12: dolfinx.fem.Constant
+    A66: dolfinx.fem.Constant
+    D11: dolfinx.fem.Constant
+    D22: dolfinx.fem.Constant
+    D12: dolfinx.fem.Constant
+    D66: dolfinx.fem.Constant
+    S1: dolfinx.fem.Constant
+    S2: dolfinx.fem.Constant
+    mass_per_area: dolfinx.fem.Constant
+    drilling: dolfinx.fem.Constant
+
+    @classmethod
+    def create(cls, mesh, s: ShellStiffness, drilling_factor: float = 1e-3) -> StiffnessConstants:
+        def c(v: float) -> dolfinx.fem.Constant:
+            return dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(v))
+
+        return cls(
+            **{k: c(getattr(s, k)) for k in ("A11", "A22", "A12", "A66", "D11", "D22", "D12",
+                                              "D66", "S1", "S2", "mass_per_area")},
+            drilling=c(drilling_factor * s.A66),
+        )  # fmt: skip
+
+    def assign(self, s: ShellStiffness, drilling_factor: float = 1e-3) -> None:
+        """Set new material values in place (same compiled forms)."""
+        for k in ("A11", "A22", "A12", "A66", "D11", "D22", "D12", "D66", "S1", "S2",
+                  "mass_per_area"):  # fmt: skip
+            getattr(self, k).value = getattr(s, k)
+        self.drilling.value = drilling_factor * s.A66
+
+
+def _orthotropic_quadratic(e, c11, c22, c12, c66):
+    return 0.5 * (c11 * e[0, 0] ** 2 + 2 * c12 * e[0, 0] * e[1, 1] + c22 * e[1, 1] ** 2
+                  + 4 * c66 * e[0, 1] ** 2)  # fmt: skip
+
+
+def membrane_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+    """ψ_m = ½ ε : A : ε, orthotropic in the (warp, weft) frame."""
+    return _orthotropic_quadratic(kin.membrane, C.A11, C.A22, C.A12, C.A66)
+
+
+def bending_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+    """ψ_b = ½ κ : D : κ, with the measured (not t³-derived) bending rigidities."""
+    return _orthotropic_quadratic(kin.bending, C.D11, C.D22, C.D12, C.D66)
+
+
+def shear_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+    """ψ_s = ½ (S₁ γ₁² + S₂ γ₂²)."""
+    g = kin.shear
+    return 0.5 * (C.S1 * g[0] ** 2 + C.S2 * g[1] ** 2)
+
+
+def drilling_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+    """ψ_d = ½ k_d δ², δ tied to the in-plane rotation of the displacement (not to zero)."""
+    return 0.5 * C.drilling * kin.drilling**2
+
+
+def gravity_work(
+    u: ufl.core.expr.Expr, C: StiffnessConstants, g: ufl.core.expr.Expr
+) -> ufl.core.expr.Expr:
+    """W_g = ρh g·u per reference area (mass is conserved, so reference area is right)."""
+    return C.mass_per_area * ufl.dot(g, u)
+
+
+def distributed_load_work(u: ufl.core.expr.Expr, f: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """W = f·u for a dead load f per unit reference area (e.g. a roof's self weight)."""
+    return ufl.dot(f, u)
+
+
+def edge_load_work(u: ufl.core.expr.Expr, t: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """W = t·u for a dead line load t per unit reference edge length (integrate with ds)."""
+    return ufl.dot(t, u)
+
+
+def pressure_residual(
+    kin: ShellKinematics, p: ufl.core.expr.Expr, v: ufl.core.expr.Expr
+) -> ufl.core.expr.Expr:
+    """Follower pressure p on the deformed surface: −p (F e₁ × F e₂)·v per reference area.
+
+    (F e₁ × F e₂) is the deformed normal times the area ratio, so p acts on the deformed area
+    along the deformed normal. Not derivable from a potential in general: a residual term.
+    """
+    return -p * ufl.dot(ufl.cross(kin.F * kin.e1, kin.F * kin.e2), v)
+
+
+def cell_size(mesh) -> dolfinx.fem.Function:
+    """Cell diameter as a DG0 Function (computed once; CellDiameter fails in P2 Expressions)."""
+    tdim = mesh.topology.dim
+    n = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
+    X = mesh.geometry.x[mesh.geometry.dofmap[:n]]
+    diam = np.zeros(n)
+    for i in range(X.shape[1]):
+        for j in range(i + 1, X.shape[1]):
+            diam = np.maximum(diam, np.linalg.norm(X[:, i] - X[:, j], axis=1))
+    h = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("DG", 0)), name="cell_size")
+    h.x.array[:n] = diam
+    return h

@@ -1,0 +1,150 @@
+r"""Kinematics of the geometrically nonlinear Naghdi (Reissner–Mindlin) shell on a surface mesh.
+
+The mid-surface moves by the displacement u; the director is rotated from its reference d₀ by a
+finite rotation R(θ) parametrised by the *total rotation vector* θ (three components):
+
+.. math::
+    \phi = X + u, \qquad d = R(\theta)\, d_0, \qquad
+    R(\theta) = \exp(\hat\theta) = I + \frac{\sin|\theta|}{|\theta|}\hat\theta
+      + \frac{1-\cos|\theta|}{|\theta|^2}\hat\theta^2 .
+
+The exponential map is regular for |θ| < 2π, so there is no singularity at the ±90° rotations a
+draped garment reaches (the two-angle director of many Naghdi codes is singular there). Near θ = 0
+the coefficients use their Taylor series so that UFL's derivatives stay finite.
+
+Strains are expressed with the surface deformation gradient F = P + ∇u (∇ is the tangential
+gradient on the manifold mesh and P = I − n⊗n the tangent projector) in an orthonormal local frame
+(e₁, e₂) of the reference tangent plane (seed paper eq. (10)–(11)):
+
+.. math::
+    \varepsilon_{\alpha\beta} = \tfrac12 (e_\alpha\cdot F^T F e_\beta - \delta_{\alpha\beta})
+        \quad\text{(Green–Lagrange membrane strain)}\\
+    \kappa_{\alpha\beta} = \operatorname{sym}(e_\alpha\cdot F^T \nabla d\, e_\beta)
+        - \operatorname{sym}(e_\alpha\cdot \nabla d_0\, e_\beta) \quad\text{(bending)}\\
+    \gamma_\alpha = e_\alpha\cdot F^T d - e_\alpha\cdot d_0 \quad\text{(transverse shear)}
+
+Subtracting the reference values makes the mesh configuration stress free even though the
+averaged director d₀ is only approximately normal to a faceted mesh. The drilling strain
+δ = ½(R e₁·F e₂ − R e₂·F e₁) vanishes when the in-plane part of R equals the rotation of the polar
+decomposition of F; it ties the drilling component of θ to the in-plane rotation of the
+displacement field (never to zero), which removes its zero-energy mode without locking.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fenics_garment._stack import dolfinx, ufl
+from fenics_garment.shell.geometry import (
+    cell_normal,
+    cell_orientation,
+    local_frame,
+    nodal_director,
+    tangent_projector,
+)
+
+_SMALL = 1e-6  # |θ|² below which the Taylor branch of the exponential map is used
+
+
+def skew(v: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """The skew matrix v̂ with v̂ a = v × a."""
+    return ufl.as_matrix([[0, -v[2], v[1]], [v[2], 0, -v[0]], [-v[1], v[0], 0]])
+
+
+def rotation_matrix(theta: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """R = exp(θ̂) (Rodrigues' formula) with Taylor branches for the coefficients near θ = 0."""
+    a2 = ufl.dot(theta, theta)
+    a = ufl.sqrt(a2 + ufl.conditional(ufl.lt(a2, _SMALL), 1.0, 0.0))  # never sqrt(0) in a branch
+    c1 = ufl.conditional(ufl.lt(a2, _SMALL), 1 - a2 / 6 + a2**2 / 120, ufl.sin(a) / a)
+    c2 = ufl.conditional(ufl.lt(a2, _SMALL), 0.5 - a2 / 24 + a2**2 / 720, (1 - ufl.cos(a)) / a2)
+    T = skew(theta)
+    return ufl.Identity(3) + c1 * T + c2 * T * T
+
+
+@dataclass(frozen=True)
+class ShellGeometry:
+    """What the shell needs to know about its reference surface, computed from the mesh."""
+
+    mesh: dolfinx.mesh.Mesh
+    orientation: dolfinx.fem.Function  # DG0, ±1
+    director: dolfinx.fem.Function  # d₀, continuous, unit at the nodes
+    warp: ufl.core.expr.Expr  # a vector field, projected onto each tangent plane for e₁
+
+    @classmethod
+    def from_mesh(
+        cls,
+        mesh: dolfinx.mesh.Mesh,
+        *,
+        warp=(1.0, 0.0, 0.0),
+        outward=None,
+        director_degree: int = 2,
+    ) -> ShellGeometry:
+        """Orient the cells, average the director, and set the warp direction field."""
+        if mesh.topology.dim != 2 or mesh.geometry.dim != 3:
+            raise ValueError(
+                f"a shell needs a surface mesh in 3D (tdim 2, gdim 3); got tdim "
+                f"{mesh.topology.dim}, gdim {mesh.geometry.dim}"
+            )
+        s = cell_orientation(mesh, outward)
+        d0 = nodal_director(mesh, s, director_degree)
+        w = warp if isinstance(warp, ufl.core.expr.Expr | dolfinx.fem.Function) else (
+            ufl.as_vector([float(c) for c in warp])
+        )  # fmt: skip
+        return cls(mesh=mesh, orientation=s, director=d0, warp=w)
+
+    @property
+    def normal(self) -> ufl.core.expr.Expr:
+        """Oriented unit normal of the cells (discontinuous across faceted edges)."""
+        return cell_normal(self.mesh, self.orientation)
+
+    @property
+    def d0(self) -> ufl.core.expr.Expr:
+        """Reference director, renormalised at quadrature points."""
+        d = self.director
+        return d / ufl.sqrt(ufl.dot(d, d))
+
+    def frame(self) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr]:
+        return local_frame(self.normal, self.warp)
+
+
+@dataclass(frozen=True)
+class ShellKinematics:
+    """Strains of the current configuration (u, θ), all in the local frame (e₁, e₂)."""
+
+    F: ufl.core.expr.Expr  # 3×3 surface deformation gradient, F = P + ∇u
+    R: ufl.core.expr.Expr  # 3×3 rotation of the director
+    d: ufl.core.expr.Expr  # current director
+    e1: ufl.core.expr.Expr
+    e2: ufl.core.expr.Expr
+    membrane: ufl.core.expr.Expr  # 2×2 Green–Lagrange strain ε
+    bending: ufl.core.expr.Expr  # 2×2 curvature change κ
+    shear: ufl.core.expr.Expr  # 2-vector transverse shear strain γ
+    drilling: ufl.core.expr.Expr  # scalar drilling strain δ
+
+
+def shell_kinematics(
+    geometry: ShellGeometry, u: ufl.core.expr.Expr, theta: ufl.core.expr.Expr
+) -> ShellKinematics:
+    """Membrane, bending, shear and drilling strains of the displacement u and rotation θ."""
+    n = geometry.normal
+    P = tangent_projector(n)
+    e1, e2 = geometry.frame()
+    e = (e1, e2)
+    d0 = geometry.d0
+    F = P + ufl.grad(u)
+    R = rotation_matrix(theta)
+    d = R * d0
+
+    C = F.T * F
+    eps = ufl.as_matrix([[0.5 * (ufl.dot(ea, C * eb) - (1.0 if a == b else 0.0)) for b, eb in
+                          enumerate(e)] for a, ea in enumerate(e)])  # fmt: skip
+    Fd = F.T * ufl.grad(d)
+    Pd0 = P * ufl.grad(d0)
+    kap = ufl.as_matrix(
+        [[0.5 * (ufl.dot(ea, Fd * eb) + ufl.dot(eb, Fd * ea))
+          - 0.5 * (ufl.dot(ea, Pd0 * eb) + ufl.dot(eb, Pd0 * ea)) for eb in e] for ea in e]
+    )  # fmt: skip
+    gam = ufl.as_vector([ufl.dot(F * ea, d) - ufl.dot(ea, d0) for ea in e])
+    drill = 0.5 * (ufl.dot(R * e1, F * e2) - ufl.dot(R * e2, F * e1))
+    return ShellKinematics(F=F, R=R, d=d, e1=e1, e2=e2, membrane=eps, bending=kap, shear=gam,
+                           drilling=drill)  # fmt: skip

@@ -1,0 +1,237 @@
+"""A shell model: function spaces, the energy Π as a sum of named terms, residual and Jacobian.
+
+The model owns no solver. ``model.residual()`` and ``model.jacobian()`` are plain UFL forms that
+:mod:`fenics_garment.solve` hands to PETSc SNES; contact or any other research term is added as
+a further residual term. Locking is cured by the element (cubic bubbles enrich the displacement)
+and by partial selective reduced integration (PSRI, Arnold & Brezzi, Math. Comp. 66 (1997) 1–14):
+membrane and shear energies are split as α·(full integration) + (1−α)·(reduced integration) with
+α = t_eff²/h², so that as t/h → 0 the constraint is imposed only at the reduced points.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import basix.ufl
+import numpy as np
+
+from fenics_garment._stack import dolfinx, ufl
+from fenics_garment.materials import Fabric, Isotropic
+from fenics_garment.shell import energy as terms
+from fenics_garment.shell.kinematics import ShellGeometry, ShellKinematics, shell_kinematics
+
+
+@dataclass(frozen=True)
+class ElementVariant:
+    """Displacement and rotation elements and the quadrature degrees (full, reduced)."""
+
+    name: str
+    u_degree: int
+    bubble: bool
+    theta_degree: int
+    full_degree: int
+    reduced_degree: int
+    psri: bool = True
+
+
+ELEMENTS: dict[str, ElementVariant] = {
+    v.name: v
+    for v in (
+        ElementVariant("P2B-P2", 2, True, 2, 4, 2),  # default on triangles
+        ElementVariant("P2-P2", 2, False, 2, 4, 2),
+        ElementVariant("P2B-P2-full", 2, True, 2, 4, 4, psri=False),  # no locking cure: for study
+        ElementVariant("Q2-Q2", 2, False, 2, 5, 3),  # quadrilaterals
+        ElementVariant("P1-P1", 1, False, 1, 2, 1),
+    )
+}
+
+EnergyTerm = Callable[[ShellKinematics, terms.StiffnessConstants], ufl.core.expr.Expr]
+
+
+def _variant_for(mesh, name: str | None) -> ElementVariant:
+    cell = mesh.topology.cell_name()
+    if name is None:
+        name = "P2B-P2" if cell == "triangle" else "Q2-Q2"
+    if name not in ELEMENTS:
+        raise ValueError(f"unknown element variant {name!r}; choose one of {sorted(ELEMENTS)}")
+    v = ELEMENTS[name]
+    if v.bubble and cell != "triangle":
+        raise ValueError(f"element {name} needs a triangle mesh; this mesh has {cell} cells")
+    return v
+
+
+@dataclass
+class ShellModel:
+    """Geometrically nonlinear Naghdi shell on ``geometry`` made of ``material``.
+
+    The energy terms are fields: replace one with ``dataclasses.replace`` or by assignment before
+    calling :meth:`residual`.
+    """
+
+    geometry: ShellGeometry
+    material: Isotropic | Fabric
+    element: str | None = None
+    drilling_factor: float = 1e-3
+    membrane: EnergyTerm = terms.membrane_energy
+    bending: EnergyTerm = terms.bending_energy
+    shear: EnergyTerm = terms.shear_energy
+    drilling: EnergyTerm = terms.drilling_energy
+    # external loads, each a (work density or residual density, measure) pair, scaled by λ
+    _work: list = field(default_factory=list, repr=False)
+    _follower: list = field(default_factory=list, repr=False)
+    _extra_residual: list = field(default_factory=list, repr=False)
+
+    def __post_init__(self) -> None:
+        mesh = self.geometry.mesh
+        self.variant = _variant_for(mesh, self.element)
+        cell = mesh.basix_cell()
+        v = self.variant
+        Pu = basix.ufl.element("Lagrange", cell, v.u_degree)
+        if v.bubble:
+            Pu = basix.ufl.enriched_element([Pu, basix.ufl.element("Bubble", cell, 3)])
+        Ue = basix.ufl.blocked_element(Pu, shape=(3,))
+        Te = basix.ufl.element("Lagrange", cell, v.theta_degree, shape=(3,))
+        self.Q = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([Ue, Te]))
+        self.q = dolfinx.fem.Function(self.Q, name="q")
+        self.stiffness = self.material.stiffness()
+        self.C = terms.StiffnessConstants.create(mesh, self.stiffness, self.drilling_factor)
+        self.load_factor = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
+        self.h_cell = terms.cell_size(mesh)
+        self.t_eff = dolfinx.fem.Constant(
+            mesh, dolfinx.default_scalar_type(self.stiffness.effective_thickness)
+        )
+        md = {"quadrature_degree": v.full_degree}
+        self.dx_full = ufl.Measure("dx", domain=mesh, metadata=md)
+        self.dx_reduced = ufl.Measure(
+            "dx", domain=mesh, metadata={"quadrature_degree": v.reduced_degree}
+        )
+
+    # -- unknowns ---------------------------------------------------------------------------
+    @property
+    def u(self) -> ufl.core.expr.Expr:
+        return ufl.split(self.q)[0]
+
+    @property
+    def theta(self) -> ufl.core.expr.Expr:
+        return ufl.split(self.q)[1]
+
+    def kinematics(self, q=None) -> ShellKinematics:
+        u, theta = ufl.split(self.q if q is None else q)
+        return shell_kinematics(self.geometry, u, theta)
+
+    @property
+    def psri_weight(self) -> ufl.core.expr.Expr:
+        """α = min(1, t_eff²/h²): the fully integrated share of membrane and shear energy."""
+        a = self.t_eff**2 / self.h_cell**2
+        return ufl.conditional(ufl.lt(a, 1.0), a, 1.0)
+
+    # -- energy -------------------------------------------------------------------------------
+    def internal_energy(self) -> ufl.Form:
+        kin = self.kinematics()
+        C = self.C
+        psi_ms = self.membrane(kin, C) + self.shear(kin, C)
+        Pi = self.bending(kin, C) * self.dx_full + self.drilling(kin, C) * self.dx_reduced
+        if self.variant.psri:
+            alpha = self.psri_weight
+            Pi += alpha * psi_ms * self.dx_full + (1 - alpha) * psi_ms * self.dx_reduced
+        else:
+            Pi += psi_ms * self.dx_full
+        return Pi
+
+    def add_work(self, density: ufl.core.expr.Expr, measure: ufl.Measure | None = None) -> None:
+        """Add the work of a dead load (density per reference area or length), scaled by λ."""
+        self._work.append((density, measure or self.dx_full))
+
+    def add_gravity(self, g=(0.0, 0.0, -9.80665)) -> None:
+        """Self weight ρh g (g in m/s², default: standard gravity along −z)."""
+        self.add_work(terms.gravity_work(self.u, self.C, ufl.as_vector(g)))
+
+    def add_distributed_load(self, f) -> None:
+        """A dead load per unit reference area, f (N/m²) as a vector."""
+        self.add_work(terms.distributed_load_work(self.u, ufl.as_vector(f)))
+
+    def add_edge_load(self, t, ds: ufl.Measure) -> None:
+        """A dead line load t (N/m) on the edges of ``ds`` (a tagged boundary measure)."""
+        self.add_work(terms.edge_load_work(self.u, ufl.as_vector(t)), ds)
+
+    def add_pressure(self, p: float | ufl.core.expr.Expr) -> None:
+        """A follower pressure p (Pa) on the deformed surface, along the oriented normal."""
+        self._follower.append(p)
+
+    def add_residual(self, form: ufl.Form) -> None:
+        """Add a residual form (e.g. contact), linear in the test function of ``self.Q``."""
+        self._extra_residual.append(form)
+
+    def external_work(self) -> ufl.Form | None:
+        forms = [self.load_factor * w * m for w, m in self._work]
+        return sum(forms[1:], forms[0]) if forms else None
+
+    def residual(self) -> ufl.Form:
+        """F(q; δq) = δΠ_int − λ δW_ext + follower and extra terms."""
+        v = ufl.TestFunction(self.Q)
+        Pi = self.internal_energy()
+        W = self.external_work()
+        total = Pi - W if W is not None else Pi
+        F = ufl.derivative(total, self.q, v)
+        if self._follower:
+            kin = self.kinematics()
+            v_u = ufl.split(v)[0]
+            for p in self._follower:
+                F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
+        for extra in self._extra_residual:
+            F += extra
+        return F
+
+    def jacobian(self, F: ufl.Form) -> ufl.Form:
+        return ufl.derivative(F, self.q, ufl.TrialFunction(self.Q))
+
+    # -- post-processing ------------------------------------------------------------------------
+    def displacement(self) -> dolfinx.fem.Function:
+        """The displacement interpolated into vector P2 (for output and point values)."""
+        V = dolfinx.fem.functionspace(self.geometry.mesh, ("Lagrange", 2, (3,)))
+        out = dolfinx.fem.Function(V, name="displacement")
+        out.interpolate(self.q.sub(0).collapse())
+        return out
+
+    def energy_value(self, form: ufl.Form) -> float:
+        comm = self.geometry.mesh.comm
+        return comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(form)))
+
+
+def evaluate_at_points(f: dolfinx.fem.Function, points: np.ndarray) -> np.ndarray:
+    """Values of ``f`` at ``points`` (n, 3), identical on every rank (owner evaluates, allreduce).
+
+    Points must lie on the surface (within a small tolerance of a cell).
+    """
+    mesh = f.function_space.mesh
+    points = np.atleast_2d(np.asarray(points, dtype=np.float64))
+    own = dolfinx.geometry.determine_point_ownership(mesh, points, 1e-6)
+    bs = f.function_space.dofmap.bs * int(np.prod(f.ufl_shape[1:] or (1,)))
+    vs = int(np.prod(f.ufl_shape)) if f.ufl_shape else 1
+    out = np.zeros((points.shape[0], vs))
+    found = np.zeros(points.shape[0])
+    src = np.asarray(own.dest_owner if hasattr(own, "dest_owner") else [], dtype=np.int32)
+    del bs, src
+    # Evaluate locally the points whose owner is this rank.
+    cells = np.asarray(own.dest_cells, dtype=np.int32)
+    pts = np.asarray(own.dest_points).reshape(-1, 3)
+    idx = _match_points(points, pts)
+    if len(cells):
+        vals = f.eval(pts, cells).reshape(len(cells), vs)
+        out[idx] = vals
+        found[idx] = 1.0
+    comm = mesh.comm
+    out = comm.allreduce(out)
+    found = comm.allreduce(found)
+    if np.any(found == 0):
+        raise ValueError(f"points not found on the mesh: {points[found == 0]}")
+    return out / found[:, None]
+
+
+def _match_points(reference: np.ndarray, pts: np.ndarray) -> np.ndarray:
+    """Index in ``reference`` of each row of ``pts`` (nearest)."""
+    if len(pts) == 0:
+        return np.zeros(0, dtype=np.int64)
+    d = np.linalg.norm(reference[None, :, :] - pts[:, None, :], axis=2)
+    return np.argmin(d, axis=1)
