@@ -52,18 +52,9 @@ class SolveFailed(RuntimeError):
 
 
 _REASONS = {
-    -1: "function domain error / NaN",
-    -2: "function count exceeded",
-    -3: "linear solve failed",
-    -4: "NaN or Inf in the residual",
-    -5: "maximum iterations",
-    -6: "line search failed",
-    -8: "diverged (divergence tolerance)",
-    -9: "Jacobian domain error",
-    -5 + 0: "maximum iterations",
-    2: "absolute tolerance",
-    3: "relative tolerance",
-    4: "step tolerance",
+    int(getattr(PETSc.SNES.ConvergedReason, k)): k.lower().replace("_", " ")
+    for k in dir(PETSc.SNES.ConvergedReason)
+    if k.isupper()
 }
 
 

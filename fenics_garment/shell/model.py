@@ -72,7 +72,7 @@ class ShellModel:
     geometry: ShellGeometry
     material: Isotropic | Fabric
     element: str | None = None
-    drilling_factor: float = 1e-3
+    drilling_factor: float = 1.0
     membrane: EnergyTerm = terms.membrane_energy
     bending: EnergyTerm = terms.bending_energy
     shear: EnergyTerm = terms.shear_energy
