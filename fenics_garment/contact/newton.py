@@ -1,0 +1,73 @@
+"""Stop-gap SNES helpers until ``fenics_garment.solve`` lands: pre-residual hooks, checked solve.
+
+``NonlinearProblem``'s residual callback copies the SNES iterate into the unknown Function and
+assembles. :func:`add_pre_residual_hooks` wraps that callback so that each hook (e.g.
+``ContactState.refresh``) sees the iterate first: the contact state (gap, normal, u_k) is then
+always the one of the point where the residual is evaluated, and the Jacobian SNES evaluates
+next, at the same point, uses it too.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from fenics_garment._stack import PETSc, dolfinx
+
+Hook = Callable[[dolfinx.fem.Function], None]
+
+
+def add_pre_residual_hooks(
+    problem: dolfinx.fem.petsc.NonlinearProblem, u: dolfinx.fem.Function, hooks: Sequence[Hook]
+) -> None:
+    """Call every hook with the current iterate before each residual evaluation of SNES."""
+    snes = problem.solver
+    b, (func, args, kargs) = snes.getFunction()
+    args = args or ()
+    kargs = kargs or {}
+
+    def residual(snes_: PETSc.SNES, x: PETSc.Vec, f: PETSc.Vec) -> None:
+        x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
+        dolfinx.fem.petsc.assign(x, u)
+        for hook in hooks:
+            hook(u)
+        func(snes_, x, f, *args, **kargs)
+
+    snes.setFunction(residual, b)
+
+
+@dataclass
+class SolveReport:
+    """Outcome of one nonlinear solve."""
+
+    converged: bool
+    reason: int
+    iterations: int
+    residuals: list[float]
+
+    def ratios(self) -> list[float]:
+        """log-ratios r_{k+1}/r_k² ... as plain ratios r_{k+1}/r_k (quadratic: they → 0)."""
+        r = self.residuals
+        return [r[k + 1] / r[k] for k in range(len(r) - 1) if r[k] > 0]
+
+    def orders(self) -> list[float]:
+        """Observed convergence orders log(r_{k+1}/r_k)/log(r_k/r_{k-1}) (≈ 2 when quadratic)."""
+        r = np.asarray(self.residuals)
+        out = []
+        for k in range(1, len(r) - 1):
+            a, b = np.log(r[k + 1] / r[k]), np.log(r[k] / r[k - 1])
+            if np.isfinite(a) and np.isfinite(b) and b != 0:
+                out.append(float(a / b))
+        return out
+
+
+def solve(problem: dolfinx.fem.petsc.NonlinearProblem) -> SolveReport:
+    """Run SNES and report convergence (``NonlinearProblem.solve`` does not raise on failure)."""
+    snes = problem.solver
+    snes.setConvergenceHistory(length=200, reset=True)
+    problem.solve()
+    reason = snes.getConvergedReason()
+    hist, _ = snes.getConvergenceHistory()
+    return SolveReport(reason > 0, int(reason), snes.getIterationNumber(), [float(v) for v in hist])
