@@ -169,6 +169,7 @@ SNES_OPTIONS = {
     "snes_atol": 1e-9,
     "snes_stol": 0.0,
     "snes_max_it": 30,
+    "snes_divergence_tolerance": -1,
     "ksp_type": "preonly",
     "pc_type": "lu",
     "pc_factor_mat_solver_type": "mumps",
@@ -235,3 +236,89 @@ def laplace_tube(
     problem = build_problem(mesh, u, energy, state, kappa, bcs)
     return Scene(mesh, u, state, problem, kappa, fabric, bcs, {"reference": ref, "R": R,
                                                                "r0": r0, "L": L})  # fmt: skip
+
+
+def strip_direction(mesh: dolfinx.mesh.Mesh, rho: float, theta: float) -> dolfinx.fem.Function:
+    """Unit centre-line tangent of the wrapped strip (DG0), from the cell midpoints."""
+    V = dolfinx.fem.functionspace(mesh, ("DG", 0, (3,)))
+    d = dolfinx.fem.Function(V)
+
+    def tangent(p: np.ndarray) -> np.ndarray:
+        x, y = p[0], p[1]
+        φ = np.arctan2(y, x)
+        t = np.vstack([-np.sin(φ), np.cos(φ), np.zeros_like(x)])
+        t[:, y < 0] = np.array([[0.0], [1.0], [0.0]])
+        after = φ > theta
+        t[:, after] = np.array([[-np.sin(theta)], [np.cos(theta)], [0.0]])
+        return t
+
+    d.interpolate(tangent)
+    return d
+
+
+def capstan_strip(
+    comm: MPI.Comm,
+    *,
+    mu: float,
+    theta: float = np.pi / 2,
+    R: float = 0.1,
+    tail: float = 0.05,
+    width: float = 0.02,
+    n_s: int = 120,
+    n_w: int = 2,
+    prestrain: float = 0.02,
+    kappa_hat: float = 10.0,
+) -> Scene:
+    """Membrane strip (E = 1 MPa, ν = 0, h = 1 mm) over a rigid cylinder by angle θ.
+
+    End A (s = 0) is clamped; end B is pulled along its tail (u_x = −δ, u_y = 0 at θ = π/2).
+    A prestrain e₀ along the strip puts it in tension on the cylinder from the start.
+    """
+    assert np.isclose(theta, np.pi / 2), "the B-end Dirichlet data assume θ = π/2"
+    fabric = Fabric.isotropic(1e6, 0.0, 1e-3)
+    rho = R + fabric.h / 2 - 1e-6  # start just inside, so that the contact is active at once
+    mesh, total = strip_mesh(comm, rho, theta, tail, width, n_s, n_w)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
+    u = dolfinx.fem.Function(V, name="u")
+    body = BodySurface(*cylinder(R, -0.05, 0.05, 2048, 2))
+    state = ContactState(mesh, u, body, offset=fabric.h / 2, band=0.01)
+    d = strip_direction(mesh, rho, theta)
+    E = green_strain(u, mesh) + prestrain * ufl.outer(d, d)  # rest length shorter by e₀
+    q = fabric.E1 / (1 - fabric.nu12**2)
+    psi = 0.5 * fabric.h * q * ((1 - fabric.nu12) * ufl.inner(E, E) + fabric.nu12 * ufl.tr(E) ** 2)
+    energy = psi * ufl.dx(metadata={"quadrature_degree": 2})
+    h_e = total / n_s
+    kappa = dolfinx.fem.Constant(mesh, kappa_hat * fabric.E1 * fabric.h / h_e**2)
+    friction = terms.Friction(mu=dolfinx.fem.Constant(mesh, mu), kappa_t=kappa)
+    fdim = 1
+    mesh.topology.create_connectivity(fdim, 2)
+    end_a = dolfinx.mesh.locate_entities_boundary(mesh, fdim, lambda p: np.isclose(p[1], -tail))
+    end_b = dolfinx.mesh.locate_entities_boundary(mesh, fdim, lambda p: np.isclose(p[0], -tail))
+    delta = dolfinx.fem.Constant(mesh, 0.0)
+    dofs_a = [dolfinx.fem.locate_dofs_topological(V.sub(c), fdim, end_a) for c in range(3)]
+    dofs_b = [dolfinx.fem.locate_dofs_topological(V.sub(c), fdim, end_b) for c in range(3)]
+    zero = PETSc.ScalarType(0)
+    bcs = [dolfinx.fem.dirichletbc(zero, dofs_a[c], V.sub(c)) for c in range(3)]
+    bcs.append(dolfinx.fem.dirichletbc(delta, dofs_b[0], V.sub(0)))
+    bcs.append(dolfinx.fem.dirichletbc(zero, dofs_b[1], V.sub(1)))
+    problem = build_problem(mesh, u, energy, state, kappa, bcs, friction, prefix="capstan_")
+    v = ufl.TestFunction(V)
+    internal = dolfinx.fem.form(ufl.derivative(energy, u, v))
+    extra = {"delta": delta, "internal": internal, "dofs_a": dofs_a[1], "dofs_b": dofs_b[0],
+             "theta": theta}  # fmt: skip
+    return Scene(mesh, u, state, problem, kappa, fabric, bcs, extra)
+
+
+def end_tensions(scene: Scene) -> tuple[float, float]:
+    """Tension forces [N] at the held end A (along +y) and the pulled end B (along −x).
+
+    They are the elastic internal forces at the end dofs (the tails carry no contact).
+    """
+    b = dolfinx.fem.assemble_vector(scene.extra["internal"])
+    b.scatter_reverse(dolfinx.la.InsertMode.add)
+    n_owned = scene.u.function_space.dofmap.index_map.size_local * 3
+    da, db = scene.extra["dofs_a"], scene.extra["dofs_b"]
+    ta = b.array[da[da < n_owned]].sum()
+    tb = b.array[db[db < n_owned]].sum()
+    comm = scene.mesh.comm
+    return -comm.allreduce(ta, op=MPI.SUM), -comm.allreduce(tb, op=MPI.SUM)
