@@ -205,6 +205,7 @@ def laplace_tube(
     L: float = 0.1,
     n_body: int = 1024,
     normal: str = "gradient",
+    kappa: float | None = None,
 ) -> Scene:
     """Tight tube (rest radius r0, ease −7 %) on a rigid cylinder of radius R (STACK.md set-up)."""
     fabric = fabric or Fabric.isotropic(1e6, 0.3, 1e-3)
@@ -220,7 +221,9 @@ def laplace_tube(
     d = axial if warp == "axial" else hoop
     energy = membrane_energy(u, mesh, fabric, d) * ufl.dx(metadata={"quadrature_degree": 2})
     h_e = 2 * np.pi * r0 / n_theta
-    kappa = dolfinx.fem.Constant(mesh, kappa_hat * fabric.E1 * fabric.h / h_e**2)
+    if kappa is None:
+        kappa = terms.default_penalty(fabric.E1 * fabric.h, h_e, kappa_hat)
+    kappa = dolfinx.fem.Constant(mesh, kappa)
     # zero-stiffness modes (axial slide, spin): fix u_y, u_z at the node (r0, 0, 0), which the
     # exact solution satisfies (STACK.md).
     node = dolfinx.mesh.locate_entities(
@@ -288,7 +291,7 @@ def capstan_strip(
     psi = 0.5 * fabric.h * q * ((1 - fabric.nu12) * ufl.inner(E, E) + fabric.nu12 * ufl.tr(E) ** 2)
     energy = psi * ufl.dx(metadata={"quadrature_degree": 2})
     h_e = total / n_s
-    kappa = dolfinx.fem.Constant(mesh, kappa_hat * fabric.E1 * fabric.h / h_e**2)
+    kappa = dolfinx.fem.Constant(mesh, terms.default_penalty(fabric.E1 * fabric.h, h_e, kappa_hat))
     friction = terms.Friction(mu=dolfinx.fem.Constant(mesh, mu), kappa_t=kappa)
     fdim = 1
     mesh.topology.create_connectivity(fdim, 2)

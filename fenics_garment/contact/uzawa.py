@@ -15,10 +15,9 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from fenics_garment._stack import MPI  # noqa: I001
-
 import numpy as np
 
+from fenics_garment._stack import MPI
 from fenics_garment.contact.newton import SolveReport
 from fenics_garment.contact.state import ContactState
 
