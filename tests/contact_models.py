@@ -186,7 +186,7 @@ def build_problem(mesh, u, energy, state, kappa, bcs, friction=None, prefix="con
     problem = dolfinx.fem.petsc.NonlinearProblem(
         F, u, bcs=bcs, petsc_options_prefix=prefix, petsc_options=opts
     )
-    newton.add_pre_residual_hooks(problem, u, [state.refresh])
+    problem.callback_times = newton.add_pre_residual_hooks(problem, u, [state.refresh])
     return problem
 
 

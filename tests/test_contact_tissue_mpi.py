@@ -26,7 +26,7 @@ def test_soft_tissue_tube_matches_laplace_on_a_winkler_layer():
     ref = k * (R_c - r)
     p = mid_pressure(scene)
     print(f"\nsoft tissue k = {k:.3e} Pa/m: p = {p:.2f} Pa, reference {ref:.2f} Pa, "
-          f"tissue compression {1e3 * (R_c - r):.2f} mm, error {100 * (p / ref - 1):+.3f} %")  # fmt: skip
+          f"compression {1e3 * (R_c - r):.2f} mm, error {100 * (p / ref - 1):+.3f} %")  # fmt: skip
     assert abs(p / ref - 1) < 0.01
 
 

@@ -9,6 +9,7 @@ next, at the same point, uses it too.
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
@@ -19,23 +20,59 @@ from fenics_garment._stack import PETSc, dolfinx
 Hook = Callable[[dolfinx.fem.Function], None]
 
 
+@dataclass
+class CallbackTimes:
+    """Wall time [s] spent in the SNES callbacks (accumulated; ``reset`` to zero them)."""
+
+    hooks_s: float = 0.0
+    residual_s: float = 0.0
+    jacobian_s: float = 0.0
+    residuals: int = 0
+    jacobians: int = 0
+
+    def reset(self) -> None:
+        self.hooks_s = self.residual_s = self.jacobian_s = 0.0
+        self.residuals = self.jacobians = 0
+
+
 def add_pre_residual_hooks(
     problem: dolfinx.fem.petsc.NonlinearProblem, u: dolfinx.fem.Function, hooks: Sequence[Hook]
-) -> None:
-    """Call every hook with the current iterate before each residual evaluation of SNES."""
+) -> CallbackTimes:
+    """Call every hook with the current iterate before each residual evaluation of SNES.
+
+    Returns the callback timers (hooks, residual assembly, Jacobian assembly).
+    """
     snes = problem.solver
+    times = CallbackTimes()
     b, (func, args, kargs) = snes.getFunction()
     args = args or ()
     kargs = kargs or {}
 
     def residual(snes_: PETSc.SNES, x: PETSc.Vec, f: PETSc.Vec) -> None:
+        t0 = time.perf_counter()
         x.ghostUpdate(addv=PETSc.InsertMode.INSERT, mode=PETSc.ScatterMode.FORWARD)
         dolfinx.fem.petsc.assign(x, u)
         for hook in hooks:
             hook(u)
+        t1 = time.perf_counter()
         func(snes_, x, f, *args, **kargs)
+        times.hooks_s += t1 - t0
+        times.residual_s += time.perf_counter() - t1
+        times.residuals += 1
 
     snes.setFunction(residual, b)
+    A, P, (jfunc, jargs, jkargs) = snes.getJacobian()
+    jargs = jargs or ()
+    jkargs = jkargs or {}
+
+    def jacobian(snes_: PETSc.SNES, x: PETSc.Vec, J: PETSc.Mat, Pm: PETSc.Mat) -> None:
+        t0 = time.perf_counter()
+        jfunc(snes_, x, J, Pm, *jargs, **jkargs)
+        times.jacobian_s += time.perf_counter() - t0
+        times.jacobians += 1
+
+    snes.setJacobian(jacobian, A, P)
+    return times
 
 
 @dataclass

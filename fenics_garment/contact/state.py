@@ -62,6 +62,7 @@ class Timings:
     eval_s: float = 0.0
     refreshes: int = 0
     points: int = 0
+    searched: int = 0
     skipped_fraction: float = 0.0
 
 
@@ -145,9 +146,11 @@ class ContactState:
         if self._unique is not None:
             first, inverse = self._unique
             d, nrm = self._broad.query(self.body, xq[first], self.normal)
+            searched = len(first)
             d, nrm = d[inverse], nrm[inverse]
         else:
             d, nrm = self._broad.query(self.body, xq, self.normal)
+            searched = len(d)
         t2 = time.perf_counter()
         dofs = self._dofs
         self.gap.x.array[dofs] = d - self.offset + float(self.shrink.value)
@@ -161,6 +164,7 @@ class ContactState:
         tm.search_s += t2 - t1
         tm.refreshes += 1
         tm.points = len(d)
+        tm.searched = round(searched * (1.0 - self._broad.skipped_fraction))
         tm.skipped_fraction = self._broad.skipped_fraction
 
     __call__ = refresh

@@ -150,7 +150,9 @@ class SoftTissue:
         return self.E * (1 - self.nu) / ((1 + self.nu) * (1 - 2 * self.nu) * self.depth)
 
 
-def default_penalty(membrane_stiffness: float, element_size: float, kappa_hat: float = 10.0) -> float:
+def default_penalty(
+    membrane_stiffness: float, element_size: float, kappa_hat: float = 10.0
+) -> float:
     """κ = κ̂ E h / ℓ²  [Pa/m], ℓ the garment element size.
 
     Scaled so that one contact point's stiffness κ ℓ² is κ̂ times the membrane's E h: the
