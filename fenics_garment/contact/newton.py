@@ -85,7 +85,7 @@ class SolveReport:
     residuals: list[float]
 
     def ratios(self) -> list[float]:
-        """log-ratios r_{k+1}/r_k² ... as plain ratios r_{k+1}/r_k (quadratic: they → 0)."""
+        """Ratios r_{k+1}/r_k of successive residual norms (quadratic convergence: they → 0)."""
         r = self.residuals
         return [r[k + 1] / r[k] for k in range(len(r) - 1) if r[k] > 0]
 
