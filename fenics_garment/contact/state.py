@@ -1,0 +1,186 @@
+"""Contact points on the garment and their gap / normal Functions, refreshed from the iterate.
+
+The contact points are the points of a quadrature rule on each garment cell (``rule``):
+
+* ``"vertex"`` — the cell vertices, equal weights (nodal enforcement, lumped): measured best for
+  P1 (smooth pressure, 3 Newton iterations; see STACK.md "Penalty contact of a tight tube").
+* ``"vertex+edge"`` — vertices and edge midpoints, equal weights (nodal enforcement for P2).
+* ``"gauss<d>"`` — the default Gauss rule of degree ``d`` (over-constrains P1; for comparison).
+
+Every quantity lives in a quadrature-space Function on those points, so the contact terms work
+whether the displacement ``u`` is a plain vector Function or ``ufl.split(q)[0]`` of a mixed one:
+
+* ``gap``      g_k = d(x_k) − h/2 − s, signed distance of the current point x_k = X + u_k to the
+  body minus the half-thickness offset and the body "shrink" ``s`` (dressing load parameter);
+* ``normal``   n_k, the smoothed body normal at the closest point;
+* ``u_k``      the displacement at the points when the state was refreshed, so that the gap is
+  linearised about the current iterate, g ≈ g_k + n_k·(u − u_k) (exact at u = u_k);
+* ``lam``      the augmented-Lagrangian multiplier (normal traction per reference area) [Pa];
+* ``u_old``    the displacement at the last converged load step (friction slip increment).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import basix
+import basix.ufl
+import numpy as np
+import numpy.typing as npt
+
+from fenics_garment._stack import dolfinx, ufl
+from fenics_garment.contact.search import BodySurface, BroadPhase
+
+F64 = npt.NDArray[np.float64]
+
+
+def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
+    """Reference points and weights of the contact-point rule (see module docstring)."""
+    ct = getattr(basix.CellType, cell)
+    vertices = np.asarray(basix.geometry(ct), dtype=np.float64)
+    volume = basix.cell.volume(ct)
+    if rule == "vertex":
+        pts = vertices
+    elif rule == "vertex+edge":
+        edges = basix.topology(ct)[1]
+        mids = np.array([0.5 * (vertices[a] + vertices[b]) for a, b in edges])
+        pts = np.vstack([vertices, mids])
+    elif rule.startswith("gauss"):
+        pts, wts = basix.make_quadrature(ct, int(rule[5:]))
+        return np.asarray(pts, dtype=np.float64), np.asarray(wts, dtype=np.float64)
+    else:
+        raise ValueError(f"unknown contact rule {rule!r}: 'vertex', 'vertex+edge' or 'gauss<d>'")
+    return pts, np.full(len(pts), volume / len(pts))
+
+
+@dataclass
+class Timings:
+    """Accumulated wall time [s] and call counts of the refresh."""
+
+    search_s: float = 0.0
+    eval_s: float = 0.0
+    refreshes: int = 0
+    points: int = 0
+    searched: int = 0
+    skipped_fraction: float = 0.0
+
+
+class ContactState:
+    """Gap, normal and reference displacement at the garment's contact points.
+
+    Args:
+        mesh: the garment mesh (tdim 2, gdim 3).
+        u: the garment displacement as a UFL expression (a Function or ``ufl.split(q)[0]``).
+        body: the body surface (replicated on every rank, search tree built once).
+        offset: distance kept between the garment mid-surface and the skin, h/2 [m].
+        rule: contact-point rule (``"vertex"``, ``"vertex+edge"``, ``"gauss<d>"``).
+        normal: ``"gradient"`` (default: consistent with the exact distance, so Newton is
+            quadratic; the mid-surface is kept h/2 outside the skin, where the distance is C¹ on
+            convex parts) or ``"phong"`` (continuous everywhere, also deep inside, but not the
+            derivative of the faceted distance: Newton then converges only linearly, ≈ 0.2 per
+            iteration on the tube test).
+        band: broad-phase band [m]: points provably farther than this are not searched.
+    """
+
+    def __init__(
+        self,
+        mesh: dolfinx.mesh.Mesh,
+        u: ufl.core.expr.Expr,
+        body: BodySurface,
+        *,
+        offset: float,
+        rule: str = "vertex",
+        normal: str = "gradient",
+        band: float = 0.02,
+    ) -> None:
+        self.mesh, self.body, self.offset, self.normal = mesh, body, offset, normal
+        cell = mesh.topology.cell_name()
+        self.points, self.weights = contact_rule(rule, cell)
+        self.rule = rule
+        self.dx = ufl.Measure(
+            "dx",
+            domain=mesh,
+            metadata={
+                "quadrature_rule": "custom",
+                "quadrature_points": self.points,
+                "quadrature_weights": self.weights,
+            },
+        )
+        qs = basix.ufl.quadrature_element(cell, (), points=self.points, weights=self.weights)
+        qv = basix.ufl.quadrature_element(cell, (3,), points=self.points, weights=self.weights)
+        self.Qs = dolfinx.fem.functionspace(mesh, qs)
+        self.Qv = dolfinx.fem.functionspace(mesh, qv)
+        self.gap = dolfinx.fem.Function(self.Qs, name="gap")
+        self.normal_fn = dolfinx.fem.Function(self.Qv, name="normal")
+        self.u_k = dolfinx.fem.Function(self.Qv, name="u_k")
+        self.lam = dolfinx.fem.Function(self.Qs, name="multiplier")
+        self.u_old = dolfinx.fem.Function(self.Qv, name="u_old")
+        self.shrink = dolfinx.fem.Constant(mesh, 0.0)  # dressing: body shrunk by s [m]
+        self.u = u
+        x = ufl.SpatialCoordinate(mesh)
+        self._x_expr = dolfinx.fem.Expression(x + u, self.points)
+        self._u_expr = dolfinx.fem.Expression(u, self.points)
+        n_owned = mesh.topology.index_map(mesh.topology.dim).size_local
+        self._cells = np.arange(n_owned, dtype=np.int32)
+        self._dofs = self.Qs.dofmap.list[self._cells].ravel()
+        self._broad = BroadPhase(band=band)
+        self._unique: tuple[np.ndarray, np.ndarray] | None = None
+        if rule == "vertex":  # search each garment vertex once, not once per adjacent cell
+            nodes = mesh.geometry.dofmaps[0][self._cells][:, : len(self.points)].ravel()
+            self._unique = np.unique(nodes, return_index=True, return_inverse=True)[1:]
+        self.timings = Timings()
+        self.u_k.x.array[:] = 0.0
+
+    # -- the pre-residual hook ------------------------------------------------------------------
+    def refresh(self, _: dolfinx.fem.Function | None = None) -> None:
+        """Recompute gap, normal and u_k from the current displacement (a pre-residual hook).
+
+        The argument is ignored: the state evaluates its own ``u`` expression, which refers to
+        the Function SNES has just updated.
+        """
+        t0 = time.perf_counter()
+        xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
+        uq = self._u_expr.eval(self.mesh, self._cells).reshape(-1, 3)
+        t1 = time.perf_counter()
+        if self._unique is not None:
+            first, inverse = self._unique
+            d, nrm = self._broad.query(self.body, xq[first], self.normal)
+            searched = len(first)
+            d, nrm = d[inverse], nrm[inverse]
+        else:
+            d, nrm = self._broad.query(self.body, xq, self.normal)
+            searched = len(d)
+        t2 = time.perf_counter()
+        dofs = self._dofs
+        self.gap.x.array[dofs] = d - self.offset + float(self.shrink.value)
+        for k in range(3):
+            self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
+            self.u_k.x.array[3 * dofs + k] = uq[:, k]
+        for f in (self.gap, self.normal_fn, self.u_k):
+            f.x.scatter_forward()
+        tm = self.timings
+        tm.eval_s += t1 - t0
+        tm.search_s += t2 - t1
+        tm.refreshes += 1
+        tm.points = len(d)
+        tm.searched = round(searched * (1.0 - self._broad.skipped_fraction))
+        tm.skipped_fraction = self._broad.skipped_fraction
+
+    __call__ = refresh
+
+    # -- helpers ------------------------------------------------------------------------------
+    def linearised_gap(self) -> ufl.core.expr.Expr:
+        """g = g_k + n_k·(u − u_k): the gap, exact at the refresh point, linear in u."""
+        return self.gap + ufl.dot(self.normal_fn, self.u - self.u_k)
+
+    def accept_step(self) -> None:
+        """Mark the current state as converged: the friction slip restarts from here."""
+        self.u_old.x.array[:] = self.u_k.x.array
+
+    def local_values(self, f: dolfinx.fem.Function) -> F64:
+        """The owned point values of a quadrature Function (scalar (n,) or vector (n, 3))."""
+        bs = f.function_space.dofmap.index_map_bs
+        if bs == 1:
+            return f.x.array[self._dofs].copy()
+        return f.x.array.reshape(-1, bs)[self._dofs].copy()
