@@ -19,7 +19,7 @@ ARG DEBIAN_FRONTEND=noninteractive
 # One apt layer with the whole numerical stack, so that changing the package's sources never
 # re-downloads it. gcc + libc6-dev + python3-dev are for the FFCx JIT (it compiles every form
 # through cffi); openmpi-bin gives `mpirun`; python3-setuptools builds the package offline
-# (`--no-build-isolation` below), so nothing in this build talks to PyPI or needs https.
+# (`--no-build-isolation` below): only the libigl step below reaches PyPI.
 # The sid index here can be older than its Valid-Until date, hence Check-Valid-Until=false.
 RUN apt-get -o Acquire::Check-Valid-Until=false update \
  && apt-get install -y --no-install-recommends \
@@ -50,6 +50,23 @@ ENV OMPI_ALLOW_RUN_AS_ROOT=1 \
     XDG_CACHE_HOME=/home/garment/.cache \
     MPLBACKEND=Agg \
     PYTHONUNBUFFERED=1
+
+# What pyproject needs and Debian does not package, from PyPI, without dependencies (they come
+# from apt above): libigl (the body-surface distance search, an abi3 wheel). This is the only
+# step that reaches PyPI (https). Behind a TLS-intercepting proxy pass its CA certificates as
+# PEM text: `--build-arg EXTRA_CA_CERTS="$(cat /usr/local/share/ca-certificates/*.crt)"`
+# (.ci/docker-check does). They are used for this pip call only and not kept in the image (the
+# build argument does show in `docker history`; CA certificates are public).
+ARG EXTRA_CA_CERTS=""
+RUN set -e; \
+    if [ -n "$EXTRA_CA_CERTS" ]; then \
+        printf '%s\n' "$EXTRA_CA_CERTS" | cat /etc/ssl/certs/ca-certificates.crt - > /tmp/ca-bundle.pem; \
+        export PIP_CERT=/tmp/ca-bundle.pem; \
+    fi; \
+    python3 -m pip install --no-deps --no-cache-dir --break-system-packages \
+        --root-user-action=ignore "libigl==2.6.3"; \
+    rm -f /tmp/ca-bundle.pem; \
+    python3 -c "import igl; igl.AABB()"
 
 # The package itself, without dependencies: DOLFINx, PETSc, MPI, gmsh, meshio, numpy and scipy
 # come from apt above, and pyproject's `dolfinx-solver-real` (the PyPI wheel of the same stack)
