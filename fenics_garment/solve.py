@@ -119,6 +119,31 @@ class NonlinearSolver:
         if self.f_point is not None:
             self._zero_bc_rows(self.f_point)
         self._install_callbacks()
+        self.residual_floor = self._measure_floor(opts)
+
+    def _measure_floor(self, opts: dict) -> float:
+        """The residual's round-off floor at the reference state (λ = 0, q = 0).
+
+        Strains are differences of O(1) metric terms, so the residual has a noise of about
+        ε_machine × stiffness that Newton cannot go below; an absolute tolerance under it stalls.
+        The absolute tolerance is raised to 100× this floor.
+        """
+        model, snes = self.model, self.problem.solver
+        lam = float(model.load_factor.value)
+        q_saved = model.q.x.array.copy()
+        model.q.x.array[:] = 0.0
+        model.load_factor.value = 0.0
+        x = self.problem.x
+        dolfinx.fem.petsc.assign(model.q, x)
+        b = self.problem.b.duplicate()
+        snes.computeFunction(x, b)
+        floor = b.norm()
+        b.destroy()
+        model.q.x.array[:] = q_saved
+        model.load_factor.value = lam
+        rtol, atol, stol, max_it = snes.getTolerances()
+        snes.setTolerances(atol=max(atol, 100.0 * floor))
+        return floor
 
     # -- PETSc plumbing ------------------------------------------------------------------------
     def _user_ksp_options(self, ksp, opts: dict, prefix: str) -> None:

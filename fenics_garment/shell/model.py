@@ -143,21 +143,45 @@ class ShellModel:
         """Add the work of a dead load (density per reference area or length), scaled by λ."""
         self._work.append((density, measure or self.dx_full))
 
-    def add_gravity(self, g=(0.0, 0.0, -9.80665)) -> None:
+    def add_gravity(self, g=(0.0, 0.0, -9.80665)) -> dolfinx.fem.Constant:
         """Self weight ρh g (g in m/s², default: standard gravity along −z)."""
-        self.add_work(terms.gravity_work(self.u, self.C, ufl.as_vector(g)))
+        c = self.constant(g)
+        self.add_work(terms.gravity_work(self.u, self.C, c))
+        return c
 
-    def add_distributed_load(self, f) -> None:
-        """A dead load per unit reference area, f (N/m²) as a vector."""
-        self.add_work(terms.distributed_load_work(self.u, ufl.as_vector(f)))
+    def constant(self, value) -> dolfinx.fem.Constant:
+        """A ``fem.Constant`` on the mesh: loads given as numbers do not recompile the forms."""
+        if isinstance(value, dolfinx.fem.Constant):
+            return value
+        arr = np.asarray(value, dtype=dolfinx.default_scalar_type)
+        return dolfinx.fem.Constant(self.geometry.mesh, arr)
 
-    def add_edge_load(self, t, ds: ufl.Measure) -> None:
+    def add_distributed_load(self, f) -> dolfinx.fem.Constant:
+        """A dead load per unit reference area, f (N/m²) as a vector; returns its Constant."""
+        c = self.constant(f)
+        self.add_work(terms.distributed_load_work(self.u, c))
+        return c
+
+    def add_edge_load(self, t, ds: ufl.Measure) -> dolfinx.fem.Constant:
         """A dead line load t (N/m) on the edges of ``ds`` (a tagged boundary measure)."""
-        self.add_work(terms.edge_load_work(self.u, ufl.as_vector(t)), ds)
+        c = self.constant(t)
+        self.add_work(terms.edge_load_work(self.u, c), ds)
+        return c
 
-    def add_pressure(self, p: float | ufl.core.expr.Expr) -> None:
+    def add_edge_moment(self, m, ds: ufl.Measure) -> dolfinx.fem.Constant:
+        """A line moment m (N·m/m) about a fixed axis on the edges of ``ds``: work m·θ.
+
+        Conservative for rotations about a fixed axis (plane bending, e.g. the roll-up).
+        """
+        c = self.constant(m)
+        self.add_work(ufl.dot(c, self.theta), ds)
+        return c
+
+    def add_pressure(self, p) -> dolfinx.fem.Constant | ufl.core.expr.Expr:
         """A follower pressure p (Pa) on the deformed surface, along the oriented normal."""
-        self._follower.append(p)
+        c = p if isinstance(p, ufl.core.expr.Expr) else self.constant(p)
+        self._follower.append(c)
+        return c
 
     def add_residual(self, form: ufl.Form) -> None:
         """Add a residual form (e.g. contact), linear in the test function of ``self.Q``."""
@@ -202,36 +226,24 @@ class ShellModel:
 def evaluate_at_points(f: dolfinx.fem.Function, points: np.ndarray) -> np.ndarray:
     """Values of ``f`` at ``points`` (n, 3), identical on every rank (owner evaluates, allreduce).
 
-    Points must lie on the surface (within a small tolerance of a cell).
+    Points must lie on the surface (within 1e-6 of a cell).
     """
     mesh = f.function_space.mesh
     points = np.atleast_2d(np.asarray(points, dtype=np.float64))
-    own = dolfinx.geometry.determine_point_ownership(mesh, points, 1e-6)
-    bs = f.function_space.dofmap.bs * int(np.prod(f.ufl_shape[1:] or (1,)))
+    comm = mesh.comm
+    query = points if comm.rank == 0 else np.zeros((0, 3))
+    own = dolfinx.geometry.determine_point_ownership(mesh, query, 1e-6)
+    cells = np.asarray(own.dest_cells, dtype=np.int32)
+    pts = np.asarray(own.dest_points, dtype=np.float64).reshape(-1, 3)
     vs = int(np.prod(f.ufl_shape)) if f.ufl_shape else 1
     out = np.zeros((points.shape[0], vs))
     found = np.zeros(points.shape[0])
-    src = np.asarray(own.dest_owner if hasattr(own, "dest_owner") else [], dtype=np.int32)
-    del bs, src
-    # Evaluate locally the points whose owner is this rank.
-    cells = np.asarray(own.dest_cells, dtype=np.int32)
-    pts = np.asarray(own.dest_points).reshape(-1, 3)
-    idx = _match_points(points, pts)
     if len(cells):
-        vals = f.eval(pts, cells).reshape(len(cells), vs)
-        out[idx] = vals
+        idx = np.argmin(np.linalg.norm(points[None, :, :] - pts[:, None, :], axis=2), axis=1)
+        out[idx] = f.eval(pts, cells).reshape(len(cells), vs)
         found[idx] = 1.0
-    comm = mesh.comm
     out = comm.allreduce(out)
     found = comm.allreduce(found)
     if np.any(found == 0):
         raise ValueError(f"points not found on the mesh: {points[found == 0]}")
     return out / found[:, None]
-
-
-def _match_points(reference: np.ndarray, pts: np.ndarray) -> np.ndarray:
-    """Index in ``reference`` of each row of ``pts`` (nearest)."""
-    if len(pts) == 0:
-        return np.zeros(0, dtype=np.int64)
-    d = np.linalg.norm(reference[None, :, :] - pts[:, None, :], axis=2)
-    return np.argmin(d, axis=1)

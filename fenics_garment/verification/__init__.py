@@ -1,0 +1,1 @@
+"""Verification cases with published or analytic reference values (used by tests and benchmarks)."""
