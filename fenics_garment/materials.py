@@ -1,4 +1,4 @@
-"""Shell materials: isotropic solids and orthotropic fabrics, as stiffness resultants per unit width.
+"""Shell materials: isotropic solids and orthotropic fabrics, as stiffness resultants per width.
 
 A shell needs four constitutive blocks, all per unit reference width, in an orthonormal local
 frame (e1 = warp, e2 = weft, in the tangent plane):

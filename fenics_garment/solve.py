@@ -141,7 +141,7 @@ class NonlinearSolver:
         b.destroy()
         model.q.x.array[:] = q_saved
         model.load_factor.value = lam
-        rtol, atol, stol, max_it = snes.getTolerances()
+        atol = snes.getTolerances()[1]
         snes.setTolerances(atol=max(atol, 100.0 * floor))
         return floor
 

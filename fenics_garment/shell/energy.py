@@ -122,7 +122,7 @@ def cell_size(mesh) -> dolfinx.fem.Function:
     """Cell diameter as a DG0 Function (computed once; CellDiameter fails in P2 Expressions)."""
     tdim = mesh.topology.dim
     n = mesh.topology.index_map(tdim).size_local + mesh.topology.index_map(tdim).num_ghosts
-    X = mesh.geometry.x[mesh.geometry.dofmap[:n]]
+    X = mesh.geometry.x[mesh.geometry.dofmaps[0][:n]]
     diam = np.zeros(n)
     for i in range(X.shape[1]):
         for j in range(i + 1, X.shape[1]):

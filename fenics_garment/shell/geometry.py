@@ -97,7 +97,7 @@ def parametric_surface_mesh(
                     if k == 2:
                         pos = {c00: (a, b), c10: (a + k, b), c01: (a, b + k), c11: (a + k, b + k)}
 
-                        def mid(p, q):
+                        def mid(p, q, pos=pos):
                             (i0, j0), (i1, j1) = pos[p], pos[q]
                             return node((i0 + i1) // 2, (j0 + j1) // 2)
 
@@ -118,14 +118,14 @@ def parametric_surface_mesh(
 def _cell_vertex_ids(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> np.ndarray:
     """Original (input) global node numbers of the corner vertices of ``cells``, in cycle order."""
     cycle = list(_CYCLE[mesh.topology.cell_name()])
-    dofs = mesh.geometry.dofmap[cells][:, cycle]
+    dofs = mesh.geometry.dofmaps[0][cells][:, cycle]
     return mesh.geometry.input_global_indices[dofs]
 
 
 def _local_normals(mesh: dolfinx.mesh.Mesh, cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit normal (from the cyclic corner order) and centroid of each cell, both (n, 3)."""
     cycle = list(_CYCLE[mesh.topology.cell_name()])
-    X = mesh.geometry.x[mesh.geometry.dofmap[cells][:, cycle]]
+    X = mesh.geometry.x[mesh.geometry.dofmaps[0][cells][:, cycle]]
     if X.shape[1] == 3:
         nrm = np.cross(X[:, 1] - X[:, 0], X[:, 2] - X[:, 0])
     else:
