@@ -126,7 +126,7 @@ class NonlinearSolver:
 
         Strains are differences of O(1) metric terms, so the residual has a noise of about
         ε_machine × stiffness that Newton cannot go below; an absolute tolerance under it stalls.
-        The absolute tolerance is raised to 100× this floor.
+        The absolute tolerance is raised to 10× this floor.
         """
         model, snes = self.model, self.problem.solver
         lam = float(model.load_factor.value)
@@ -142,7 +142,7 @@ class NonlinearSolver:
         model.q.x.array[:] = q_saved
         model.load_factor.value = lam
         atol = snes.getTolerances()[1]
-        snes.setTolerances(atol=max(atol, 100.0 * floor))
+        snes.setTolerances(atol=max(atol, 10.0 * floor))
         return floor
 
     # -- PETSc plumbing ------------------------------------------------------------------------
