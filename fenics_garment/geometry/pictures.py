@@ -52,7 +52,10 @@ def draw_mesh(
     rgba[:, 3] = alpha
     depth = p.mean(axis=1) @ toward
     xy = np.stack([p @ right, p @ up], axis=-1)
-    return [(depth[i], xy[i], rgba[i], edge) for i in np.flatnonzero(keep)]
+    # layer 1 for faces turned to the viewer when two-sided: a garment's outside is drawn
+    # over the body, whose coarse triangles would otherwise win the centroid-depth sort
+    layer = (facing > 0).astype(int) if two_sided else np.zeros(len(cells), int)
+    return [((layer[i], depth[i]), xy[i], rgba[i], edge) for i in np.flatnonzero(keep)]
 
 
 def render(items: list, ax) -> None:

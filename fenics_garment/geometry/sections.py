@@ -185,3 +185,22 @@ def slice_loops(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> 
             p = p[::-1]
         loops.append(p)
     return loops
+
+
+def offset_by(pts: Array, d: float) -> Array:
+    """Move every point of a counter-clockwise closed curve ``d`` along its outward normal."""
+    return pts + d * _vertex_normals(pts)
+
+
+def signed_distance_2d(points: Array, polygon: Array) -> Array:
+    """Distance of points to a closed polygon, negative inside (for clearance checks)."""
+    from matplotlib.path import Path as MplPath
+
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    ab = b - a
+    ap = points[:, None, :] - a[None, :, :]
+    t = np.clip(np.einsum("pki,ki->pk", ap, ab) / np.einsum("ki,ki->k", ab, ab), 0.0, 1.0)
+    dist = np.linalg.norm(ap - t[..., None] * ab[None], axis=2).min(axis=1)
+    inside = MplPath(polygon).contains_points(points)
+    return np.where(inside, -dist, dist)
