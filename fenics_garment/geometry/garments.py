@@ -187,8 +187,7 @@ class GarmentSurface:
 
     def girth(self, z: float) -> float:
         """Length of the garment's section at height ``z`` (all pieces summed)."""
-        loops = sec.slice_loops(self.points, self.triangles(), z)
-        return float(sum(sec.perimeter(p, closed=_is_closed(p)) for p in loops))
+        return sec.section_length(self.points, self.triangles(), z)
 
     def level(self, name: str) -> GarmentLevel:
         """The construction row of a level by name."""
@@ -196,12 +195,6 @@ class GarmentSurface:
             if lv.name == name:
                 return lv
         raise MissingRegion(name, tuple(lv.name for lv in self.levels))
-
-
-def _is_closed(p: Array) -> bool:
-    return bool(
-        np.linalg.norm(p[0] - p[-1]) < 3 * np.median(np.linalg.norm(np.diff(p, axis=0), axis=1))
-    )
 
 
 def intended_clearance(garment: GarmentSurface) -> list[GarmentLevel]:

@@ -126,8 +126,20 @@ def slice_loops(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> 
     """Closed loops where the plane ``z`` cuts a triangle surface, as (k, 2) arrays (x, y).
 
     Loops are oriented counter-clockwise seen from above. Open chains (a plane through a hole
-    or an open garment edge) are returned as they are, oriented the same way.
+    or an open garment edge) are returned as they are; :func:`slice_chains` tells them apart.
     """
+    return [p for p, _ in slice_chains(vertices, triangles, z)]
+
+
+def section_length(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> float:
+    """Total length of the section of a surface by the plane ``z`` (closed loops and chains)."""
+    return float(sum(perimeter(p, closed=c) for p, c in slice_chains(vertices, triangles, z)))
+
+
+def slice_chains(
+    vertices: Array, triangles: npt.NDArray[np.int64], z: float
+) -> list[tuple[Array, bool]]:
+    """Like :func:`slice_loops`, with a flag per piece: True for a closed loop."""
     v = np.asarray(vertices)
     tri = np.asarray(triangles)
     zz = v[:, 2] - z
@@ -160,7 +172,7 @@ def slice_loops(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> 
         edge_segs[e0].append(s)
         edge_segs[e1].append(s)
     used = np.zeros(cut.size, dtype=bool)
-    loops: list[Array] = []
+    loops: list[tuple[Array, bool]] = []
     # start open chains at edges with a single segment, then closed loops anywhere
     starts = [e for e, ss in enumerate(edge_segs) if len(ss) == 1]
     starts += list(range(len(keys)))
@@ -170,10 +182,12 @@ def slice_loops(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> 
             continue
         chain = [e_start]
         e, s = e_start, free[0]
+        closed = False
         while True:
             used[s] = True
             e = seg_pair[s, 1] if seg_pair[s, 0] == e else seg_pair[s, 0]
             if e == e_start:
+                closed = True
                 break
             chain.append(e)
             nxt = [q for q in edge_segs[e] if not used[q]]
@@ -183,7 +197,7 @@ def slice_loops(vertices: Array, triangles: npt.NDArray[np.int64], z: float) -> 
         p = pts[chain]
         if len(p) >= 3 and polygon_area(p) < 0:
             p = p[::-1]
-        loops.append(p)
+        loops.append((p, closed))
     return loops
 
 
