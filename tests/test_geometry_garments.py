@@ -1,4 +1,4 @@
-"""Garments: girth = (1 + ease) × requested body girth, clearance as constructed, tags, orientation."""
+"""Garments: girth = (1 + ease) × requested girth, clearance as constructed, tags, orientation."""
 
 import numpy as np
 import pytest

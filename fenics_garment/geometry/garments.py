@@ -161,7 +161,7 @@ class GarmentSurface:
         normal built from the cell's own vertex order) by this sign.
         """
         mesh = self.mesh
-        dm = mesh.geometry.dofmap
+        dm = mesh.geometry.dofmaps[0]
         x = mesh.geometry.x
         n_out = self.node_values(self.normal)
         p0, p1, p2 = x[dm[:, 0]], x[dm[:, 1]], x[dm[:, 2]]
