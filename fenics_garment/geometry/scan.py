@@ -125,9 +125,7 @@ def _torso_loop(v, t, z, centre) -> Array | None:
 
 
 def _contains(p: Array, c: Array) -> bool:
-    from matplotlib.path import Path as MplPath
-
-    return bool(MplPath(p).contains_point(c))
+    return bool(sec.contains(p, np.asarray(c))[0])
 
 
 def locate_landmarks(vertices: Array, triangles: npt.NDArray[np.int64]) -> dict[str, float]:

@@ -208,13 +208,24 @@ def offset_by(pts: Array, d: float) -> Array:
 
 def signed_distance_2d(points: Array, polygon: Array) -> Array:
     """Distance of points to a closed polygon, negative inside (for clearance checks)."""
-    from matplotlib.path import Path as MplPath
-
     a = polygon
     b = np.roll(polygon, -1, axis=0)
     ab = b - a
     ap = points[:, None, :] - a[None, :, :]
     t = np.clip(np.einsum("pki,ki->pk", ap, ab) / np.einsum("ki,ki->k", ab, ab), 0.0, 1.0)
     dist = np.linalg.norm(ap - t[..., None] * ab[None], axis=2).min(axis=1)
-    inside = MplPath(polygon).contains_points(points)
-    return np.where(inside, -dist, dist)
+    return np.where(contains(polygon, points), -dist, dist)
+
+
+def contains(polygon: Array, points: Array) -> npt.NDArray[np.bool_]:
+    """Even-odd point-in-polygon test (numpy only)."""
+    p = np.atleast_2d(points)
+    a = polygon
+    b = np.roll(polygon, -1, axis=0)
+    inside = np.zeros(len(p), dtype=bool)
+    for (x0, y0), (x1, y1) in zip(a, b, strict=True):
+        crosses = (y0 > p[:, 1]) != (y1 > p[:, 1])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            xs = x0 + (p[:, 1] - y0) * (x1 - x0) / (y1 - y0)
+        inside ^= crosses & (p[:, 0] < xs)
+    return inside
