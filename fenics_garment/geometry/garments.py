@@ -1,0 +1,723 @@
+"""Garments cut from a body: gilet, one-piece dress, tube/sleeve and compression stocking.
+
+Construction (the garment mesh is the shell's **stress-free reference configuration**):
+
+1. At each garment level (landmark heights of the body, plus hem/top levels) take the body's
+   tape section ``S`` (convex, counter-clockwise; :meth:`BodySurface.section`) with girth ``G``.
+2. The garment section is the **normal offset** of ``S`` by the signed clearance ``d`` chosen so
+   that its perimeter is ``(1 + ease) G``. For a convex curve Steiner's formula gives
+   ``d = ease · G / (2π)`` (a few Newton steps remove the discretisation error). Positive ease:
+   the garment is outside the body at distance ``d``; negative ease (tight): ``d < 0``, the
+   stress-free garment lies inside the body by ``|d|``, and the dressing step later grows the
+   body from inside it. ``min_clearance`` (optional) raises ``d`` to at least that value; the
+   level's effective ease then follows from the new perimeter and is what the table reports.
+3. OpenCASCADE lofts (``ThruSections``) one smooth open surface through the sections; each
+   section is a back half and a front half meeting at the lateral points, so the loft comes out
+   as a **back** and a **front** panel sharing the side seam lines. Armholes, necklines and a
+   front opening are boolean cuts with ellipsoids/boxes.
+4. gmsh meshes it (triangles, or quadrilaterals by recombination), every panel's mesh is
+   oriented so that its cell normals point **away from the body** (outward), and physical
+   groups name panels (``front``, ``back`` or ``front_left``/``front_right``) and edges
+   (``hem``, ``neckline``, ``armhole_left``/``_right``, ``side_seam_left``/``_right``,
+   ``shoulder_seam_left``/``_right``, ``opening_left``/``_right``, ``welt``, ``top``).
+
+Between levels the loft interpolates, so ``d`` is exact at the levels and smooth in between.
+Directions: +z up, the body faces −y, its left is +x; the warp (fabric length direction) is the
+vertical projected on the tangent plane (``warp_direction``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from . import sections as sec
+from .body import BodySurface
+from .errors import GeometryError, MissingRegion
+from .gmsh_utils import gmsh_session, to_dolfinx
+from .mannequin import add_loft
+
+Array = npt.NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class GarmentLevel:
+    """One row of a garment's construction table (all lengths in metres).
+
+    ``garment_girth = (1 + ease) · body_girth`` and ``clearance`` is the signed normal distance
+    from the body section to the garment section at height ``z`` (negative: inside the body).
+    Skirt levels below the hip have no body section: their ``body_girth`` is the hip's.
+    """
+
+    name: str
+    z: float
+    body_girth: float
+    ease: float
+    garment_girth: float
+    clearance: float
+
+
+@dataclass
+class GarmentSurface:
+    """A meshed garment: arrays on every rank and, if built with a communicator, a DOLFINx mesh.
+
+    Arrays are in gmsh node order (``points[i]`` is gmsh node ``i + 1``), replicated on all ranks:
+    ``cells`` (m, 3) triangles or (m, 4) quadrilaterals oriented with normals pointing away
+    from the body; ``cell_panel`` the panel tag per cell; ``warp`` and ``normal`` unit vectors
+    per node. ``edge_nodes[name]`` holds the (k, 2) node pairs of each tagged edge.
+    """
+
+    kind: str
+    points: Array
+    cells: npt.NDArray[np.int64]
+    cell_panel: npt.NDArray[np.int32]
+    panels: dict[str, int]
+    edges: dict[str, int]
+    edge_nodes: dict[str, npt.NDArray[np.int64]]
+    warp: Array
+    normal: Array
+    levels: list[GarmentLevel]
+    meshdata: Any = None
+    info: dict[str, float] = field(default_factory=dict)
+
+    # -- DOLFINx side -------------------------------------------------------------------------
+    @property
+    def mesh(self) -> Any:
+        """The DOLFINx mesh (tdim 2, gdim 3); only when built with ``comm``."""
+        if self.meshdata is None:
+            raise RuntimeError("built without a communicator: pass comm=MPI.COMM_WORLD")
+        return self.meshdata.mesh
+
+    @property
+    def cell_tags(self) -> Any:
+        """Panel tags of the DOLFINx cells (values: :attr:`panels`)."""
+        return self.meshdata.cell_tags
+
+    @property
+    def facet_tags(self) -> Any:
+        """Edge tags (hems, seams…) of the DOLFINx facets (values: :attr:`edges`)."""
+        return self.meshdata.facet_tags
+
+    def panel(self, name: str) -> int:
+        """Tag of a named panel; :class:`MissingRegion` if absent."""
+        if name not in self.panels:
+            raise MissingRegion(name, tuple(self.panels))
+        return self.panels[name]
+
+    def edge(self, name: str) -> int:
+        """Tag of a named edge (hem, seam…); :class:`MissingRegion` if absent."""
+        if name not in self.edges:
+            raise MissingRegion(name, tuple(self.edges))
+        return self.edges[name]
+
+    def node_values(self, values: Array) -> Array:
+        """Per-gmsh-node ``values`` reordered to this rank's DOLFINx geometry nodes."""
+        return values[np.asarray(self.mesh.geometry.input_global_indices, dtype=np.int64)]
+
+    def warp_function(self, V: Any) -> Any:
+        """The warp direction as a DOLFINx Function on the vector space ``V``.
+
+        Each dof takes the inverse-distance mean of the three nearest geometry nodes' warp,
+        re-projected on the tangent plane and normalised (exact at P1 dofs).
+        """
+        return self._vector_function(V, self.warp)
+
+    def normal_function(self, V: Any) -> Any:
+        """The outward (away-from-body) unit normal as a Function on the vector space ``V``."""
+        return self._vector_function(V, self.normal)
+
+    def _vector_function(self, V: Any, nodal: Array) -> Any:
+        from scipy.spatial import cKDTree
+
+        from fenics_garment._stack import dolfinx
+
+        x = self.mesh.geometry.x
+        vals = self.node_values(nodal)
+        nrm = self.node_values(self.normal)
+        tree = cKDTree(x)
+        f = dolfinx.fem.Function(V)
+
+        def evaluate(p: Array) -> Array:
+            d, i = tree.query(p.T, k=min(3, len(x)))
+            w = 1.0 / np.maximum(d, 1e-12) ** 2
+            w[d < 1e-12] = 1e12
+            v = np.einsum("pk,pki->pi", w, vals[i])
+            n = np.einsum("pk,pki->pi", w, nrm[i])
+            n /= np.linalg.norm(n, axis=1)[:, None]
+            if nodal is not self.normal:
+                v -= np.einsum("pi,pi->p", v, n)[:, None] * n
+            return (v / np.linalg.norm(v, axis=1)[:, None]).T
+
+        f.interpolate(evaluate)
+        return f
+
+    def cell_orientation(self) -> npt.NDArray[np.int8]:
+        """+1/−1 per local DOLFINx cell: does its vertex order give the outward normal?
+
+        DOLFINx may reorder cell vertices, so the shell should multiply ``CellNormal`` (or any
+        normal built from the cell's own vertex order) by this sign.
+        """
+        mesh = self.mesh
+        dm = mesh.geometry.dofmaps[0]
+        x = mesh.geometry.x
+        n_out = self.node_values(self.normal)
+        p0, p1, p2 = x[dm[:, 0]], x[dm[:, 1]], x[dm[:, 2]]
+        if dm.shape[1] == 4 and mesh.topology.cell_name() == "quadrilateral":
+            p1, p2 = x[dm[:, 1]], x[dm[:, 2]]  # DOLFINx quad order: 0-1 / 2-3 tensor layout
+        nc = np.cross(p1 - p0, p2 - p0)
+        out = n_out[dm[:, :3]].sum(axis=1)
+        return np.where(np.einsum("ij,ij->i", nc, out) >= 0, 1, -1).astype(np.int8)
+
+    # -- plain-array helpers ------------------------------------------------------------------
+    def triangles(self) -> npt.NDArray[np.int64]:
+        """Cells as triangles (quads split along 0–2), orientation kept."""
+        if self.cells.shape[1] == 3:
+            return self.cells
+        c = self.cells
+        return np.concatenate([c[:, [0, 1, 2]], c[:, [0, 2, 3]]])
+
+    @property
+    def triangle_cell(self) -> npt.NDArray[np.int64]:
+        """For each row of :meth:`triangles`, the cell it came from."""
+        m = len(self.cells)
+        return np.arange(m) if self.cells.shape[1] == 3 else np.concatenate([np.arange(m)] * 2)
+
+    def girth(self, z: float) -> float:
+        """Length of the garment's section at height ``z`` (all pieces summed)."""
+        return sec.section_length(self.points, self.triangles(), z)
+
+    def level(self, name: str) -> GarmentLevel:
+        """The construction row of a level by name."""
+        for lv in self.levels:
+            if lv.name == name:
+                return lv
+        raise MissingRegion(name, tuple(lv.name for lv in self.levels))
+
+
+def intended_clearance(garment: GarmentSurface) -> list[GarmentLevel]:
+    """The construction table: per level the body girth, ease, garment girth and clearance."""
+    return list(garment.levels)
+
+
+# ---------------------------------------------------------------------------------------------
+# Building blocks
+# ---------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class _Cut:
+    kind: str  # "ellipsoid" or "box"
+    centre: tuple[float, float, float]
+    size: tuple[float, float, float]  # semi-axes (ellipsoid) or full extents (box)
+
+
+def _garment_section(
+    body_pts: Array, ease: float, min_clearance: float | None
+) -> tuple[Array, float, float, float]:
+    """Offset the tape section: returns (points, body girth, effective ease, clearance)."""
+    hull = sec.convex_hull(body_pts)
+    dense = sec.resample_by_angle(hull, 720)
+    g = sec.perimeter(dense)
+    pts, d = sec.offset_to_perimeter(dense, (1.0 + ease) * g)
+    if min_clearance is not None and d < min_clearance:
+        pts, d = sec.offset_by(dense, min_clearance), min_clearance
+    return pts, g, sec.perimeter(pts) / g - 1.0, d
+
+
+def _levels_from(
+    body: BodySurface,
+    names: list[str],
+    ease: dict[str, float],
+    min_clearance: float | None,
+    extra: dict[str, tuple[float, str, float]] | None = None,
+) -> tuple[dict[str, tuple[float, Array]], list[GarmentLevel]]:
+    """Garment sections for body levels ``names`` (bottom to top); ``extra`` adds levels
+    ``name -> (z, copy_of_level, extra_clearance)`` that reuse another level's body section."""
+    out: dict[str, tuple[float, Array]] = {}
+    table: list[GarmentLevel] = []
+    for name in names:
+        if extra and name in extra:
+            z, src, add = extra[name]
+            _, body_pts = body.section(src)
+            e = ease.get(name, ease.get(src, 0.0))
+            pts, g, e_eff, d = _garment_section(body_pts, e, min_clearance)
+            if add:
+                pts = sec.offset_by(pts, add)
+                d += add
+                e_eff = sec.perimeter(pts) / g - 1.0
+        else:
+            z, body_pts = body.section(name)
+            pts, g, e_eff, d = _garment_section(body_pts, ease.get(name, 0.0), min_clearance)
+        out[name] = (z, pts)
+        table.append(GarmentLevel(name, z, g, e_eff, (1.0 + e_eff) * g, d))
+    return out, table
+
+
+def _mesh_options(g: Any, h: float, quads: bool, per_circle: int = 24) -> None:
+    g.option.setNumber("Mesh.MeshSizeMax", h)
+    g.option.setNumber("Mesh.MeshSizeMin", h / 4)
+    g.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
+    g.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
+    g.option.setNumber("Mesh.Algorithm", 8 if quads else 6)
+    if quads:
+        g.option.setNumber("Mesh.RecombineAll", 1)
+        g.option.setNumber("Mesh.RecombinationAlgorithm", 1)
+        g.option.setNumber("Mesh.SubdivisionAlgorithm", 1)  # split leftovers: all quads
+        g.option.setNumber("Mesh.MeshSizeMax", 2 * h)  # subdivision halves the size
+
+
+def _centre_of(levels: dict[str, tuple[float, Array]]) -> tuple[Array, Array]:
+    zs = np.array([z for z, _ in levels.values()])
+    cs = np.array([p.mean(axis=0) for _, p in levels.values()])
+    order = np.argsort(zs)
+    return zs[order], cs[order]
+
+
+def _build(
+    g: Any,
+    kind: str,
+    levels: dict[str, tuple[float, Array]],
+    cuts: list[_Cut],
+    classify: Any,
+    h: float,
+    quads: bool,
+) -> dict[str, Any]:
+    """Loft, cut, mesh, orient, name; returns the plain arrays (on the gmsh rank)."""
+    occ = g.model.occ
+    faces = [dt for dt in add_loft(g, levels, solid=False) if dt[0] == 2]
+    if cuts:
+        tools = []
+        for c in cuts:
+            if c.kind == "ellipsoid":
+                t = occ.addSphere(*c.centre, 1.0)
+                occ.dilate([(3, t)], *c.centre, *c.size)
+            else:
+                t = occ.addBox(*(np.array(c.centre) - np.array(c.size) / 2), *c.size)
+            tools.append((3, t))
+        faces, _ = occ.cut(faces, tools)
+        faces = [dt for dt in faces if dt[0] == 2]
+        if not faces:
+            raise GeometryError(f"{kind}: the cuts removed the whole garment")
+    occ.synchronize()
+    _remove_all_but(g, faces)
+    zc, cc = _centre_of(levels)
+
+    def centre(z: float) -> Array:
+        return np.array([np.interp(z, zc, cc[:, 0]), np.interp(z, zc, cc[:, 1])])
+
+    # panels
+    panel_faces: dict[str, list[int]] = {}
+    for _, f in faces:
+        x, y, z = g.model.occ.getCenterOfMass(2, f)
+        panel_faces.setdefault(classify.panel(x, y - centre(z)[1]), []).append(f)
+    panels = {name: i + 1 for i, name in enumerate(sorted(panel_faces))}
+    # edges
+    curves: dict[str, list[int]] = {}
+    face_set = {f for _, f in faces}
+    all_curves = {
+        abs(c) for _, f in faces for _, c in g.model.getBoundary([(2, f)], oriented=False)
+    }
+    for c in sorted(all_curves):
+        up, _ = g.model.getAdjacencies(1, c)
+        n_faces = len([f for f in up if f in face_set])
+        bb = g.model.getBoundingBox(1, c)
+        name = classify.edge(bb, n_faces)
+        if name:
+            curves.setdefault(name, []).append(c)
+    edges = {name: 100 + i for i, name in enumerate(sorted(curves))}
+    for name, tag in panels.items():
+        g.model.addPhysicalGroup(2, panel_faces[name], tag, name=name)
+    for name, tag in edges.items():
+        g.model.addPhysicalGroup(1, curves[name], tag, name=name)
+    _mesh_options(g, h, quads)
+    g.model.mesh.generate(2)
+    g.model.mesh.renumberNodes()
+    g.model.mesh.renumberElements()
+    # orient each face's mesh outward (away from the garment axis)
+    for _, f in faces:
+        etypes, _, enodes = g.model.mesh.getElements(2, f)
+        x = _node_coords(g)
+        s = 0.0
+        for et, en in zip(etypes, enodes, strict=True):
+            k = 3 if et == 2 else 4
+            c = en.astype(np.int64).reshape(-1, k) - 1
+            p = x[c]
+            nrm = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+            mid = p.mean(axis=1)
+            rad = mid[:, :2] - np.array([centre(z) for z in mid[:, 2]])
+            s += float(np.sum(nrm[:, 0] * rad[:, 0] + nrm[:, 1] * rad[:, 1]))
+        if s < 0:
+            g.model.mesh.reverse([(2, f)])
+    return _extract(g, kind, panels, edges, panel_faces, curves)
+
+
+def _remove_all_but(g: Any, faces: list[tuple[int, int]]) -> None:
+    """Delete construction entities (section points, wires, tools) so that no orphan node is
+    meshed: only ``faces`` and their boundary curves and points stay in the model."""
+    keep = set(faces)
+    keep |= set(g.model.getBoundary(faces, combined=False, oriented=False, recursive=False))
+    keep |= set(g.model.getBoundary(faces, combined=False, oriented=False, recursive=True))
+    keep = {(d, abs(t)) for d, t in keep}
+    for dim in (3, 2, 1, 0):
+        drop = [dt for dt in g.model.getEntities(dim) if dt not in keep]
+        if drop:
+            g.model.occ.remove(drop)
+    g.model.occ.synchronize()
+
+
+def _node_coords(g: Any) -> Array:
+    tags, coords, _ = g.model.mesh.getNodes()
+    x = np.empty((int(tags.max()), 3))
+    x[tags.astype(np.int64) - 1] = coords.reshape(-1, 3)
+    return x
+
+
+def _extract(g, kind, panels, edges, panel_faces, curves) -> dict[str, Any]:
+    x = _node_coords(g)
+    cells, cell_panel = [], []
+    for name, fs in panel_faces.items():
+        for f in fs:
+            etypes, _, enodes = g.model.mesh.getElements(2, f)
+            for et, en in zip(etypes, enodes, strict=True):
+                k = 3 if et == 2 else 4
+                c = en.astype(np.int64).reshape(-1, k) - 1
+                cells.append(c)
+                cell_panel.append(np.full(len(c), panels[name], dtype=np.int32))
+    ks = {c.shape[1] for c in cells}
+    if len(ks) != 1:
+        raise GeometryError(f"{kind}: mixed triangles and quadrilaterals after recombination")
+    cells_a = np.concatenate(cells)
+    edge_nodes = {}
+    for name, cs in curves.items():
+        pairs = []
+        for c in cs:
+            _, _, en = g.model.mesh.getElements(1, c)
+            pairs.append(en[0].astype(np.int64).reshape(-1, 2) - 1)
+        edge_nodes[name] = np.concatenate(pairs)
+    # outward vertex normals (area weighted) and the warp
+    p = x[cells_a]
+    nc = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    if cells_a.shape[1] == 4:
+        nc = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    normal = np.zeros_like(x)
+    for j in range(cells_a.shape[1]):
+        np.add.at(normal, cells_a[:, j], nc)
+    normal /= np.linalg.norm(normal, axis=1)[:, None] + 1e-300
+    return {
+        "kind": kind,
+        "points": x,
+        "cells": cells_a,
+        "cell_panel": np.concatenate(cell_panel),
+        "panels": panels,
+        "edges": edges,
+        "edge_nodes": edge_nodes,
+        "normal": normal,
+        "warp": warp_direction(normal),
+    }
+
+
+def warp_direction(normal: Array, along: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> Array:
+    """Unit tangent closest to ``along`` (vertical by default) at each node.
+
+    Where the surface is nearly horizontal (the tangential part of ``along`` shorter than 0.2)
+    the fabric's warp is taken front-to-back (the y axis projected) instead.
+    """
+    a = np.asarray(along, dtype=float)
+    w = a - (normal @ a)[:, None] * normal
+    flat = np.linalg.norm(w, axis=1) < 0.2
+    ey = np.array([0.0, 1.0, 0.0])
+    w[flat] = ey - (normal[flat] @ ey)[:, None] * normal[flat]
+    return w / np.linalg.norm(w, axis=1)[:, None]
+
+
+def _finish(
+    kind: str,
+    comm: Any | None,
+    build: Any,
+    table: list[GarmentLevel],
+) -> GarmentSurface:
+    """Run ``build(g)`` on rank 0 in a gmsh session, share the arrays, make the DOLFINx mesh."""
+    import time
+
+    t0 = time.perf_counter()
+    with gmsh_session(comm, 0, name=kind) as g:
+        data = build(g) if g is not None else None
+        if comm is not None and comm.size > 1:
+            data = comm.bcast(data, root=0)
+        meshdata = None
+        if comm is not None:
+            meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
+    data["info"] = {"seconds": time.perf_counter() - t0, "cells": len(data["cells"])}
+    return GarmentSurface(levels=table, meshdata=meshdata, **data)
+
+
+class _TorsoClassifier:
+    """Panels by the side of the face's centre of mass; edges by position and valence."""
+
+    def __init__(self, z_hem, z_top, z_arm, x_neck, gap):
+        self.z_hem, self.z_top, self.z_arm, self.x_neck, self.gap = z_hem, z_top, z_arm, x_neck, gap
+
+    def panel(self, x: float, dy: float) -> str:
+        if dy > 0:
+            return "back"
+        if self.gap:
+            return "front_left" if x > 0 else "front_right"
+        return "front"
+
+    def edge(self, bb, n_faces: int) -> str | None:
+        x0, _, z0, x1, _, z1 = bb
+        xc, zc = 0.5 * (x0 + x1), 0.5 * (z0 + z1)
+        side = "left" if xc > 0 else "right"
+        if n_faces == 2:
+            return f"side_seam_{side}" if zc < self.z_arm else f"shoulder_seam_{side}"
+        if self.gap and x1 - x0 < 1e-3 and abs(abs(xc) - self.gap / 2) < 1e-3:
+            return f"opening_{side}"
+        if z1 < self.z_hem + 1e-4:
+            return "hem"
+        if z0 > self.z_top - 1e-4 or abs(xc) < self.x_neck:
+            return "neckline"
+        return f"armhole_{side}"
+
+
+class _TubeClassifier:
+    def __init__(self, z_hem, z_top, top_name="top", x_mid=0.0):
+        self.z_hem, self.z_top, self.top_name, self.x_mid = z_hem, z_top, top_name, x_mid
+
+    def panel(self, x: float, dy: float) -> str:
+        return "back" if dy > 0 else "front"
+
+    def edge(self, bb, n_faces: int) -> str | None:
+        x0, _, z0, x1, _, z1 = bb
+        if n_faces == 2:
+            return "seam_left" if 0.5 * (x0 + x1) > self.x_mid else "seam_right"
+        if z1 < self.z_hem + 1e-4:
+            return "hem"
+        if z0 > self.z_top - 1e-4:
+            return self.top_name
+        return None
+
+
+def _ease_dict(ease: float | dict[str, float], default: dict[str, float]) -> dict[str, float]:
+    if isinstance(ease, dict):
+        return {**default, **ease}
+    return dict.fromkeys(default, float(ease))
+
+
+# ---------------------------------------------------------------------------------------------
+# The garments
+# ---------------------------------------------------------------------------------------------
+
+GILET_EASE = {
+    "hip": 0.04, "abdomen": 0.04, "waist": 0.03, "underbust": 0.03, "bust": 0.03,
+    "upper_chest": 0.03, "shoulder": 0.02, "neck_base": 0.15,
+}  # fmt: skip
+
+
+def _top_cuts(
+    body: BodySurface,
+    levels: dict[str, tuple[float, Array]],
+    strap: float,
+    arm_drop: float,
+    scoop_front: float,
+    scoop_back: float,
+    gap: float | None,
+    z_lo: float,
+    z_hi: float,
+) -> tuple[list[_Cut], float, float]:
+    """Armhole ellipsoids at the shoulder tips, neckline scoops, an optional front opening."""
+    z_sh, sh = levels["shoulder"]
+    z_nb, nb = levels["neck_base"]
+    z_uc = body.landmarks["upper_chest"]
+    x_tip = sh[:, 0].max()
+    x_neck = nb[:, 0].max()
+    z_bottom = z_uc - arm_drop
+    zc = z_sh + 0.03
+    cuts = []
+    x_in = x_neck + strap
+    ax = x_tip + 0.03 - x_in
+    for s in (1.0, -1.0):
+        cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), 0.0, zc), (ax, 0.085, zc - z_bottom)))
+    y_front = nb[:, 1].min()
+    y_back = nb[:, 1].max()
+    if scoop_front > 0:
+        cuts.append(_Cut("ellipsoid", (0.0, y_front, z_nb), (x_neck + 0.01, 0.09, scoop_front)))
+    if scoop_back > 0:
+        cuts.append(_Cut("ellipsoid", (0.0, y_back, z_nb), (x_neck + 0.01, 0.09, scoop_back)))
+    if gap:
+        cuts.append(_Cut("box", (0.0, -0.5, 0.5 * (z_lo + z_hi)), (gap, 1.0, z_hi - z_lo + 0.2)))
+    cuts.append(
+        _Cut("box", (0.0, 0.0, z_nb + 0.5), (2.0, 2.0, 1.0))
+    )  # everything above the neck base
+    return cuts, x_neck * 0.999, z_bottom
+
+
+def make_gilet(
+    body: BodySurface,
+    ease: float | dict[str, float] = GILET_EASE,
+    h: float = 0.015,
+    min_clearance: float | None = None,
+    hem: str = "hip",
+    strap: float = 0.07,
+    armhole_drop: float = 0.02,
+    neck_scoop: float = 0.06,
+    front_opening: float | None = None,
+    quads: bool = False,
+    comm: Any | None = None,
+) -> GarmentSurface:
+    """A sleeveless gilet from ``hem`` level (2.5 cm below it) to the base of the neck.
+
+    Args:
+        body: the body (mannequin or scan) with torso landmarks.
+        ease: one value for all levels or a dict per level (fraction: 0.03 = +3 % girth).
+        h: target element size (m).
+        min_clearance: raise the normal offset to at least this (m), see module doc.
+        hem: landmark level of the hem (``hip``, ``abdomen`` or ``waist``).
+        strap: width (m) of fabric left between the neck and the armhole over the shoulder.
+        armhole_drop: how far (m) the armhole reaches below the upper-chest level.
+        neck_scoop: depth (m) of the front neckline below the neck base.
+        front_opening: width (m) of a centre-front opening (None: closed front).
+        quads: quadrilateral cells (gmsh recombination) instead of triangles.
+        comm: MPI communicator: build on its rank 0 and distribute as a DOLFINx mesh.
+    """
+    torso = ["hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder"]
+    names = ["hem", *torso[torso.index(hem) :], "neck_base", "neck"]
+    e = _ease_dict(ease, GILET_EASE)
+    e.setdefault("neck", e["neck_base"])
+    z_hem = body.landmarks[hem] - 0.025
+    levels, table = _levels_from(body, names, e, min_clearance, {"hem": (z_hem, hem, 0.0)})
+    table = table[:-1]  # the neck section only guides the loft; it is cut away
+    z_top = levels["neck_base"][0]
+    cuts, x_neck, z_arm = _top_cuts(
+        body, levels, strap, armhole_drop, neck_scoop, 0.0, front_opening, z_hem, z_top
+    )
+    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, front_opening)
+    return _finish("gilet", comm, lambda g: _build(g, "gilet", levels, cuts, cls, h, quads), table)
+
+
+DRESS_EASE = {
+    "hip": 0.06, "abdomen": 0.05, "waist": 0.03, "underbust": 0.03, "bust": 0.03,
+    "upper_chest": 0.03, "shoulder": 0.02, "neck_base": 0.25,
+}  # fmt: skip
+
+
+def make_dress(
+    body: BodySurface,
+    ease: float | dict[str, float] = DRESS_EASE,
+    h: float = 0.015,
+    min_clearance: float | None = None,
+    length: float = 0.45,
+    flare: float = 0.25,
+    strap: float = 0.045,
+    armhole_drop: float = 0.03,
+    neck_scoop: float = 0.12,
+    back_scoop: float = 0.10,
+    quads: bool = False,
+    comm: Any | None = None,
+) -> GarmentSurface:
+    """A one-piece dress: fitted bodice with shoulder straps (cut by wide armholes and front and
+    back scoops) and a flared skirt hanging ``length`` (m) below the hip level.
+
+    The skirt sections are the hip section offset further, linearly in height, so that the hem
+    girth is ``(1 + ease_hip + flare) ×`` the hip girth; rows ``skirt_k`` of the table report
+    that against the hip girth.
+    """
+    e = _ease_dict(ease, DRESS_EASE)
+    z_hip = body.landmarks["hip"]
+    g_hip = sec.perimeter(sec.resample_by_angle(sec.convex_hull(body.section("hip")[1]), 720))
+    n_sk = 3
+    extra = {}
+    for k in range(n_sk, 0, -1):
+        frac = k / n_sk
+        extra[f"skirt_{n_sk - k}"] = (
+            z_hip - frac * length,
+            "hip",
+            frac * flare * g_hip / (2 * np.pi),
+        )
+    names = [*extra, "hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder"]
+    names += ["neck_base", "neck"]
+    e.setdefault("neck", e["neck_base"])
+    levels, table = _levels_from(body, names, e, min_clearance, extra)
+    table = table[:-1]  # the neck section only guides the loft; it is cut away
+    z_hem = levels["skirt_0"][0]
+    z_top = levels["neck_base"][0]
+    cuts, x_neck, z_arm = _top_cuts(
+        body, levels, strap, armhole_drop, neck_scoop, back_scoop, None, z_hem, z_top
+    )
+    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None)
+    return _finish("dress", comm, lambda g: _build(g, "dress", levels, cuts, cls, h, quads), table)
+
+
+STOCKING_EASE = {"ankle": -0.20, "calf": -0.16, "knee": -0.13, "thigh": -0.10}
+
+
+def make_stocking(
+    body: BodySurface,
+    side: str = "left",
+    ease: float | dict[str, float] = STOCKING_EASE,
+    h: float = 0.012,
+    min_clearance: float | None = None,
+    quads: bool = False,
+    comm: Any | None = None,
+) -> GarmentSurface:
+    """A compression stocking on one leg, ankle to thigh, graduated ease (tightest at the ankle).
+
+    Default ease (−20 % ankle … −10 % thigh) is our illustrative graduation, not a class of a
+    compression standard.
+    """
+    e = _ease_dict(ease, STOCKING_EASE)
+    lv = ["ankle", "calf", "knee", "thigh"]
+    e = {f"{k}_{side}": v for k, v in e.items()}
+    z_a, z_t = body.landmarks["ankle"], body.landmarks["thigh"]
+    extra = {
+        "hem": (z_a - 0.015, f"ankle_{side}", 0.0),
+        "welt": (z_t + 0.02, f"thigh_{side}", 0.0),
+    }
+    e["hem"], e["welt"] = e[f"ankle_{side}"], e[f"thigh_{side}"]
+    names = ["hem", *[f"{k}_{side}" for k in lv], "welt"]
+    levels, table = _levels_from(body, names, e, min_clearance, extra)
+    x_mid = float(np.mean([p[:, 0].mean() for _, p in levels.values()]))
+    cls = _TubeClassifier(levels["hem"][0], levels["welt"][0], "welt", x_mid)
+    return _finish(
+        "stocking", comm, lambda g: _build(g, "stocking", levels, [], cls, h, quads), table
+    )
+
+
+def make_tube(
+    body: BodySurface,
+    ease: float | dict[str, float] = -0.07,
+    h: float = 0.01,
+    min_clearance: float | None = None,
+    quads: bool = False,
+    comm: Any | None = None,
+) -> GarmentSurface:
+    """A sleeve/tube over a cylinder body from :func:`cylinder_body` (levels bottom, mid, top)."""
+    e = _ease_dict(ease, {"bottom": 0.0, "mid": 0.0, "top": 0.0})
+    levels, table = _levels_from(body, ["bottom", "mid", "top"], e, min_clearance)
+    cls = _TubeClassifier(levels["bottom"][0], levels["top"][0])
+    return _finish("tube", comm, lambda g: _build(g, "tube", levels, [], cls, h, quads), table)
+
+
+def cylinder_body(radius: float = 0.1, length: float = 0.2, margin: float = 0.05,
+                  h: float = 0.01) -> BodySurface:  # fmt: skip
+    """A closed circular cylinder (an arm, or a test rig) as a body, axis z, z ∈ [−margin,
+    length + margin]; its levels ``bottom``/``mid``/``top`` are at 0, length/2 and length."""
+    from .mannequin import _surface_arrays
+    from .surface import orient_outward
+
+    with gmsh_session(name="cylinder") as g:
+        g.model.occ.addCylinder(0, 0, -margin, 0, 0, length + 2 * margin, radius)
+        g.model.occ.synchronize()
+        g.option.setNumber("Mesh.MeshSizeMax", h)
+        g.option.setNumber("Mesh.MeshSizeFromCurvature", 24)
+        g.model.mesh.generate(2)
+        v, t = _surface_arrays(g, 1)
+    t = orient_outward(v, t)
+    th = np.linspace(0, 2 * np.pi, 720, endpoint=False)
+    circle = radius * np.column_stack([np.cos(th), np.sin(th)])
+    marks = {"bottom": 0.0, "mid": length / 2, "top": length}
+    return BodySurface(
+        v, t, np.ones(len(t), np.int32), {"cylinder": 1}, marks, dict.fromkeys(marks, circle)
+    )

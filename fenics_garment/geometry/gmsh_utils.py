@@ -1,0 +1,83 @@
+"""gmsh lives on one MPI rank: a context manager for its life cycle and the hand-over to DOLFINx.
+
+gmsh keeps global state, so it is initialised once per ``with`` block and always finalised, even
+when building the geometry raises. Only the ``rank`` process builds the model; the others get
+``None`` and take part in the collective :func:`dolfinx.io.gmsh.model_to_mesh` afterwards.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from typing import Any
+
+import gmsh
+
+
+@contextmanager
+def gmsh_session(
+    comm: Any | None = None, rank: int = 0, verbose: bool = False, name: str = "model"
+) -> Iterator[Any]:
+    """Yield ``gmsh`` on ``rank`` of ``comm`` (always if ``comm`` is None), None elsewhere.
+
+    If gmsh is already initialised by the caller it is left initialised, and a fresh model is
+    added and removed instead, so sessions nest.
+    """
+    if comm is not None and comm.rank != rank:
+        yield None
+        return
+    owner = not gmsh.isInitialized()
+    if owner:
+        gmsh.initialize(["-noenv"], readConfigFiles=False)
+    gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
+    gmsh.option.setNumber("General.Verbosity", 5 if verbose else 1)
+    gmsh.model.add(name)
+    try:
+        yield gmsh
+    finally:
+        try:
+            gmsh.model.remove()
+        finally:
+            if owner:
+                gmsh.finalize()
+
+
+def to_dolfinx(comm: Any, model: Any | None, rank: int = 0, gdim: int = 3) -> Any:
+    """Distribute the gmsh model of ``rank`` as a DOLFINx mesh (``MeshData``); collective."""
+    from dolfinx.io import gmsh as dgmsh
+
+    from fenics_garment._stack import dolfinx  # noqa: F401  (import order: MPI first)
+
+    return dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
+
+
+def add_discrete_surface(
+    g: Any,
+    vertices: Any,
+    triangles: Any,
+    tags: Any,
+    names: dict[str, int],
+) -> None:
+    """Put a triangle soup with one integer tag per triangle into the current model.
+
+    One discrete surface (and one physical group named after the region) per tag, all sharing
+    one node set, so that ``gmsh.write`` or ``model_to_mesh`` keep the region names.
+    """
+    import numpy as np
+
+    vertices = np.asarray(vertices, dtype=np.float64)
+    triangles = np.asarray(triangles, dtype=np.int64)
+    tags = np.asarray(tags)
+    base = g.model.addDiscreteEntity(2)  # holds the nodes, has no elements
+    node_tags = np.arange(1, len(vertices) + 1, dtype=np.uint64)
+    g.model.mesh.addNodes(2, base, node_tags, vertices.ravel())
+    next_el = 1
+    for name, value in sorted(names.items(), key=lambda kv: kv[1]):
+        sel = np.flatnonzero(tags == value)
+        if sel.size == 0:
+            continue
+        s = g.model.addDiscreteEntity(2)
+        el = np.arange(next_el, next_el + sel.size, dtype=np.uint64)
+        next_el += sel.size
+        g.model.mesh.addElementsByType(s, 2, el, (triangles[sel] + 1).ravel().astype(np.uint64))
+        g.model.addPhysicalGroup(2, [s], int(value), name=name)

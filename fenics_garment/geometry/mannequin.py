@@ -1,0 +1,216 @@
+"""A parametric dress-form mannequin (torso, neck and legs; no arms, no head) lofted in gmsh/OCC.
+
+Each landmark level gets a horizontal section: a superellipse with its own width, front depth
+and back depth (:class:`~.sections.SectionShape`), scaled so that its perimeter is the requested
+tape girth. OpenCASCADE's ``ThruSections`` lofts a smooth solid through the sections; a loft
+interpolates its sections, so the surface passes exactly through each landmark curve and the
+girth there is the requested one (up to the mesh's chord error, ≈ h²/(24 r²) relatively).
+Legs are lofted separately and fused with the torso.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .body import BodySurface, finish_body
+from .gmsh_utils import gmsh_session
+from .measurements import Measurements
+from .sections import SectionShape
+
+# Section proportions per level: (half width, front depth, back depth, superellipse exponent).
+# Only ratios matter for girth levels. Our own estimates of a dress form's shape (not data).
+TORSO_SHAPES: dict[str, tuple[float, float, float, float]] = {
+    "crotch": (0.165, 0.095, 0.125, 2.3),
+    "hip": (0.175, 0.100, 0.140, 2.3),
+    "abdomen": (0.160, 0.110, 0.115, 2.3),
+    "waist": (0.135, 0.092, 0.090, 2.3),
+    "underbust": (0.140, 0.088, 0.092, 2.4),
+    "bust": (0.155, 0.125, 0.092, 2.2),
+    "upper_chest": (0.155, 0.095, 0.095, 2.5),
+    "neck_base": (0.060, 0.055, 0.055, 2.0),
+    "neck": (0.055, 0.055, 0.055, 2.0),
+}
+LEG_SHAPES: dict[str, tuple[float, float, float, float]] = {
+    "ankle": (0.030, 0.034, 0.036, 2.0),
+    "calf": (0.050, 0.050, 0.062, 2.0),
+    "knee": (0.052, 0.056, 0.052, 2.2),
+    "thigh": (0.080, 0.095, 0.098, 2.1),
+}
+# Girths of the levels that are not measurements, relative to measured ones (estimates).
+DERIVED_GIRTHS = {
+    "crotch": ("hip_girth", 0.90),
+    "abdomen": None,  # mean of waist and hip
+    "upper_chest": ("bust_girth", 0.97),
+    "neck_base": ("neck_girth", 1.12),
+}
+LEG_CENTRE_X = {"ankle": 0.070, "calf": 0.075, "knee": 0.078, "thigh": 0.090}  # at size 88
+
+
+@dataclass(frozen=True)
+class MeshSizes:
+    """Target element sizes (m): ``fine`` inside ``band`` = (z_min, z_max), ``coarse`` outside.
+
+    ``per_circle`` caps the size by curvature (gmsh's MeshSizeFromCurvature: elements per 2π
+    of turning): a polygon of n sides around a circle is short by ≈ π²/(6n²) of its
+    perimeter, so n = 24 keeps girths of thin limbs within 0.3 % at any target size.
+    """
+
+    coarse: float = 0.03
+    fine: float = 0.015
+    band: tuple[float, float] | None = None
+    per_circle: int = 24
+
+
+def torso_sections(m: Measurements) -> dict[str, tuple[float, np.ndarray]]:
+    """Height and (x, y) curve of every torso level, each scaled to its girth."""
+    out: dict[str, tuple[float, np.ndarray]] = {}
+    for level, (hw, f, b, n) in TORSO_SHAPES.items():
+        shape = SectionShape(hw, f, b, n)
+        g = _girth(m, level)
+        out[level] = (m.height(level), shape.points(720, shape.scale_for_girth(g)))
+    # the shoulder line is set by the biacromial breadth, not a girth
+    sh = SectionShape(m.shoulder_width / 2 + 0.012, 0.055, 0.065, 2.4)
+    out["shoulder"] = (m.height("shoulder"), sh.points(720))
+    top = m.height("neck") + 0.035
+    out["neck_top"] = (top, out["neck"][1])
+    order = ["crotch", "hip", "abdomen", "waist", "underbust", "bust", "upper_chest"]
+    order += ["shoulder", "neck_base", "neck", "neck_top"]
+    return {k: out[k] for k in order}
+
+
+def leg_sections(m: Measurements, side: int) -> dict[str, tuple[float, np.ndarray]]:
+    """Sections of the left (side=+1, +x) or right (side=−1) leg, ankle to crotch."""
+    k = m.hip_girth / 0.96
+    out: dict[str, tuple[float, np.ndarray]] = {}
+    for level, params in LEG_SHAPES.items():
+        shape = SectionShape(*params)  # scaled about its own centre, then moved sideways
+        pts = shape.points(720, shape.scale_for_girth(getattr(m, f"{level}_girth")))
+        out[level] = (m.height(level), pts + np.array([side * LEG_CENTRE_X[level] * k, 0.0]))
+    z0 = m.height("ankle") - 0.03
+    bottom = out["ankle"][1]
+    top_z = m.height("crotch") + 0.05
+    th = out["thigh"][1]
+    cx = th[:, 0].mean()
+    top = (th - [cx, 0.0]) * 0.8 + [side * 0.085 * k, 0.0]
+    return {"ankle_bottom": (z0, bottom), **out, "top": (top_z, top)}
+
+
+def _girth(m: Measurements, level: str) -> float:
+    g = m.girth(level)
+    if g is not None:
+        return g
+    if level == "abdomen":
+        return 0.5 * (m.waist_girth + m.hip_girth)
+    name, ratio = DERIVED_GIRTHS[level]  # type: ignore[misc]
+    return ratio * getattr(m, name)
+
+
+def add_loft(g, secs: dict[str, tuple[float, np.ndarray]], n_pts: int = 24, solid: bool = True):
+    """OCC loft through closed sections; each wire is a back half and a front half spline.
+
+    The halves meet at the lateral points (+x and −x), so an open loft yields two faces
+    (back first, then front) sharing the side lines; returns the OCC entities made.
+    """
+    from .sections import resample_by_angle
+
+    wires = []
+    for z, pts in secs.values():
+        c = pts.mean(axis=0)
+        p = resample_by_angle(pts, n_pts, centre=c)
+        tags = [g.model.occ.addPoint(x, y, z) for x, y in p]
+        half = n_pts // 2
+        back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
+        front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
+        wires.append(g.model.occ.addWire([back, front]))
+    return g.model.occ.addThruSections(wires, makeSolid=solid, makeRuled=False)
+
+
+def make_mannequin(
+    m: Measurements | None = None,
+    sizes: MeshSizes | None = None,
+    z_range: tuple[float, float] | None = None,
+    legs: bool = True,
+    order: int = 1,
+) -> BodySurface:
+    """Loft, fuse, crop to ``z_range`` (m), mesh, orient outward and tag regions.
+
+    Args:
+        m: body measurements (default: :func:`~.measurements.measurements` size 88).
+        sizes: element sizes; give ``band`` to refine where a garment will touch.
+        z_range: keep only the body between these heights (flat caps close it).
+        legs: loft and fuse the legs (a gilet or dress scene may leave them out).
+        order: 1 or 2. With 2, the gmsh mesh is made second order and every curved
+            6-node triangle is split into 4 flat ones, so vertices lie on the smooth surface.
+
+    Runs gmsh in this process (call it on every rank, or on one and broadcast: it is
+    deterministic). Returns a :class:`BodySurface`.
+    """
+    m = m or Measurements()
+    sizes = sizes or MeshSizes()
+    torso = torso_sections(m)
+    legs_secs = [leg_sections(m, +1), leg_sections(m, -1)] if legs else []
+    with gmsh_session(name="mannequin") as g:
+        occ = g.model.occ
+        parts = add_loft(g, torso)
+        for ls in legs_secs:
+            parts += add_loft(g, ls)
+        vols = [(3, t) for d, t in parts if d == 3]
+        if len(vols) > 1:
+            vols, _ = occ.fuse(vols[:1], vols[1:])
+        if z_range is not None:
+            box = occ.addBox(-1.0, -1.0, z_range[0], 2.0, 2.0, z_range[1] - z_range[0])
+            vols, _ = occ.intersect(vols, [(3, box)])
+        occ.synchronize()
+        _size_field(g, sizes)
+        g.option.setNumber("Mesh.Algorithm", 6)
+        g.model.mesh.generate(2)
+        if order == 2:
+            g.model.mesh.setOrder(2)
+        vertices, triangles = _surface_arrays(g, order)
+    landmarks = {k: z for k, (z, _) in torso.items()}
+    sections = {k: p for k, (z, p) in torso.items()}
+    for side, ls in zip(("left", "right")[: len(legs_secs)], legs_secs, strict=True):
+        for k in ("ankle", "calf", "knee", "thigh"):
+            landmarks[k] = ls[k][0]
+            sections[f"{k}_{side}"] = ls[k][1]
+    return finish_body(vertices, triangles, landmarks, sections, m)
+
+
+def _size_field(g, sizes: MeshSizes) -> None:
+    g.option.setNumber("Mesh.MeshSizeMax", sizes.coarse)
+    g.option.setNumber("Mesh.MeshSizeMin", min(sizes.fine, sizes.coarse) / 4)
+    g.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    g.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 0)
+    g.option.setNumber("Mesh.MeshSizeFromCurvature", sizes.per_circle)
+    if sizes.band is None:
+        g.option.setNumber("Mesh.MeshSizeMax", min(sizes.fine, sizes.coarse))
+        return
+    f = g.model.mesh.field.add("Box")
+    g.model.mesh.field.setNumber(f, "VIn", sizes.fine)
+    g.model.mesh.field.setNumber(f, "VOut", sizes.coarse)
+    for k, v in zip(("XMin", "XMax", "YMin", "YMax"), (-1, 1, -1, 1), strict=True):
+        g.model.mesh.field.setNumber(f, k, v)
+    g.model.mesh.field.setNumber(f, "ZMin", sizes.band[0])
+    g.model.mesh.field.setNumber(f, "ZMax", sizes.band[1])
+    g.model.mesh.field.setNumber(f, "Thickness", 0.1)
+    g.model.mesh.field.setAsBackgroundMesh(f)
+
+
+def _surface_arrays(g, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """All surface triangles of the current model with contiguous 0-based vertex numbers."""
+    tags, coords, _ = g.model.mesh.getNodes()
+    pos = np.empty(int(tags.max()) + 1, dtype=np.int64)
+    pos[tags.astype(np.int64)] = np.arange(len(tags))
+    etype = 2 if order == 1 else 9
+    _, nodes = g.model.mesh.getElementsByType(etype)
+    conn = pos[nodes.astype(np.int64)].reshape(-1, 3 if order == 1 else 6)
+    if order == 2:  # split each 6-node triangle into four: corners 0-2, mid-edges 3 (01), 4, 5
+        a, b, c, ab, bc, ca = conn.T
+        conn = np.concatenate(
+            [np.column_stack(t) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))]
+        )
+    vertices = coords.reshape(-1, 3)
+    used, inv = np.unique(conn.ravel(), return_inverse=True)
+    return vertices[used], inv.reshape(conn.shape).astype(np.int64)

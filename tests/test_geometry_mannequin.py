@@ -1,0 +1,74 @@
+"""The parametric mannequin: requested girths, a closed outward surface, all regions present."""
+
+import numpy as np
+import pytest
+
+from fenics_garment.geometry import MeshSizes, MissingRegion, make_mannequin, measurements
+from fenics_garment.geometry.sections import SectionShape, perimeter, slice_loops, tape_girth
+
+
+@pytest.fixture(scope="module")
+def body():
+    return make_mannequin(measurements("88"), MeshSizes(coarse=0.02, fine=0.02))
+
+
+def test_sections_perimeter_of_circle_and_ellipse():
+    # independent references: 2πr, and Ramanujan's ellipse perimeter
+    r = 0.1
+    assert perimeter(SectionShape(r, r, r).points(2000)) == pytest.approx(2 * np.pi * r, rel=1e-5)
+    a, b = 0.15, 0.1
+    h = ((a - b) / (a + b)) ** 2
+    ram = np.pi * (a + b) * (1 + 3 * h / (10 + np.sqrt(4 - 3 * h)))
+    assert perimeter(SectionShape(a, b, b).points(4000)) == pytest.approx(ram, rel=1e-5)
+
+
+def test_slice_of_a_cube_is_its_perimeter():
+    v = np.array([[x, y, z] for z in (0, 1) for y in (0, 1) for x in (0, 1)], float)
+    q = [[0, 2, 3, 1], [4, 5, 7, 6], [0, 1, 5, 4], [2, 6, 7, 3], [0, 4, 6, 2], [1, 3, 7, 5]]
+    t = np.array([tri for a, b, c, d in q for tri in ((a, b, c), (a, c, d))])
+    (loop,) = slice_loops(v, t, 0.3)
+    assert tape_girth(loop) == pytest.approx(4.0)
+
+
+@pytest.mark.parametrize(
+    "level", ["neck", "bust", "underbust", "waist", "hip", "thigh", "knee", "calf", "ankle"]
+)
+def test_girths_match_request(body, level):
+    requested = body.measurements.girth(level)
+    sides = ["_left", "_right"] if level in ("thigh", "knee", "calf", "ankle") else [""]
+    for s in sides:
+        assert body.girth(level + s) == pytest.approx(requested, rel=0.01)
+
+
+def test_overrides_change_the_surface():
+    m = measurements("88", waist_girth=0.80)
+    b = make_mannequin(m, MeshSizes(coarse=0.025, fine=0.025), z_range=(0.9, 1.2), legs=False)
+    assert b.girth("waist") == pytest.approx(0.80, rel=0.01)
+
+
+def test_closed_manifold_outward(body):
+    info = body.check()
+    assert info["closed_manifold"]
+    assert info["components"] == 1
+    assert info["volume"] > 0.03  # m³: an adult torso + legs is tens of litres, and positive
+
+
+def test_every_region_present(body):
+    from fenics_garment.geometry.regions import REGIONS
+
+    assert set(body.regions) == set(REGIONS)
+    for name in REGIONS:
+        assert body.triangles_of(name).size > 0
+    with pytest.raises(MissingRegion) as err:
+        body.triangles_of("elbow")
+    assert "waist" in str(err.value)
+
+
+def test_crop_keeps_only_the_band():
+    b = make_mannequin(sizes=MeshSizes(0.03, 0.015, band=(1.0, 1.3)), z_range=(0.85, 1.45))
+    z = b.vertices[:, 2]
+    assert z.min() == pytest.approx(0.85, abs=1e-6) and z.max() == pytest.approx(1.45, abs=1e-6)
+    assert b.check()["closed_manifold"] and b.check()["volume"] > 0
+    assert "thighs" not in b.regions and "waist" in b.regions
+    # finer inside the band: shorter edges at the waist than at the hip cap
+    assert b.girth("waist") == pytest.approx(b.measurements.waist_girth, rel=0.01)
