@@ -33,6 +33,9 @@ DEFAULT_SNES_OPTIONS: dict[str, object] = {
     # round-off floor; the absolute tolerance is also raised to 10× the measured floor (below).
     "snes_stol": 1e-10,
     "snes_max_it": 25,
+    # A residual that grows in the first iterations (contact switching, a large load step) is not
+    # a failure by itself; divergence is judged by max_it, NaN checks and the load stepper.
+    "snes_divergence_tolerance": -1,
     "ksp_type": "preonly",
     "pc_type": "lu",
     "pc_factor_mat_solver_type": "mumps",
