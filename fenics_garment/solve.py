@@ -214,7 +214,7 @@ class NonlinearSolver:
         its, reason = snes.getIterationNumber(), snes.getConvergedReason()
         self.timings.newton_iterations += its
         self.timings.linear_iterations += snes.getLinearSolveIterations()
-        self.timings.solve += dt - 0.0
+        self.timings.solve += dt
         return its, reason
 
     def residual_history(self) -> np.ndarray:

@@ -44,9 +44,7 @@ def point_load_vector(model, loads: list[PointLoad]) -> PETSc.Vec:
         for cell, x0 in zip(cells, dest_pts, strict=True):
             X = geom.x[geom.dofmap[cell]]
             ref = geom.cmap.pull_back(x0.reshape(1, 3), X)
-            i = int(np.argmin(np.linalg.norm(pts - x0, axis=1))) if len(pts) else 0
             force = np.array(_loads_by_nearest(loads, x0).force)
-            del i
             for comp in range(3):
                 sub = Q.sub(0).sub(comp)
                 trial = ufl.TrialFunction(sub)
