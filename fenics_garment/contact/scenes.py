@@ -259,4 +259,6 @@ def mid_pressure(scene: Scene, where=None) -> float:
     else:
         sel = where(x)
     comm = scene.model.geometry.mesh.comm
-    return comm.allreduce(force[sel].sum(), op=MPI.SUM) / comm.allreduce(area[sel].sum(), op=MPI.SUM)
+    return comm.allreduce(force[sel].sum(), op=MPI.SUM) / comm.allreduce(
+        area[sel].sum(), op=MPI.SUM
+    )

@@ -49,15 +49,12 @@ class ClosestPoints:
         point: closest point on the surface, shape (n, 3).
         face: index of the triangle holding it, shape (n,).
         normal: unit contact normal (outward, smoothed as chosen), shape (n, 3).
-        curvature: ∂n/∂x ≈ the smoothed (Phong) surface curvature tensor at the closest point,
-            symmetric, tangential, shape (n, 3, 3); only with ``curvature=True``.
     """
 
     distance: F64
     point: F64
     face: I64
     normal: F64
-    curvature: F64 | None = None
 
 
 class BodySurface:
@@ -113,11 +110,7 @@ class BodySurface:
         return inv.reshape(-1, 3), _unit(acc)
 
     def closest(
-        self,
-        points: npt.ArrayLike,
-        normal: str = "phong",
-        feature_tol: float = 1e-9,
-        curvature: bool = False,
+        self, points: npt.ArrayLike, normal: str = "phong", feature_tol: float = 1e-9
     ) -> ClosestPoints:
         """Exact closest points, signed distances and contact normals.
 
@@ -127,13 +120,11 @@ class BodySurface:
                 or ``"face"`` (raw facet normal, for comparison only).
             feature_tol: barycentric tolerance below which the closest point is taken to lie
                 on an edge or vertex (for the choice of pseudonormal).
-            curvature: also return ∂n/∂x (see :meth:`curvature`).
         """
         x = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         if len(x) == 0:
             e = np.zeros((0, 3))
-            k = np.zeros((0, 3, 3)) if curvature else None
-            return ClosestPoints(np.zeros(0), e, np.zeros(0, np.int64), e.copy(), k)
+            return ClosestPoints(np.zeros(0), e, np.zeros(0, np.int64), e.copy())
         sq, face, c = self._tree.squared_distance(self.vertices, self.triangles, x)
         face = np.asarray(face, dtype=np.int64)
         bary = self._barycentric(c, face)
@@ -153,35 +144,7 @@ class BodySurface:
             n = self.face_normals[face]
         else:
             raise ValueError(f"normal must be 'phong', 'gradient' or 'face', not {normal!r}")
-        k = self.curvature(face, bary) if curvature else None
-        return ClosestPoints(signed, c, face, n, k)
-
-    def curvature(self, face: I64, bary: F64) -> F64:
-        """∂n/∂c of the Phong normal n = N/|N|, N = Σᵢ bᵢ nᵢ, on the tangent plane (n, 3, 3).
-
-        ∂N/∂c = Σᵢ nᵢ ⊗ ∇bᵢ with ∇bᵢ = f × eᵢ / (2A) (eᵢ the edge opposite vertex i, f the face
-        normal); ∂n/∂c = (I − n⊗n) ∂N/∂c / |N|, projected on the tangent plane and symmetrised.
-        For a smooth body it is the curvature tensor (1/R on a sphere), and for a point at a
-        distance d ≪ R it approximates the Hessian of the distance, i.e. ∂n/∂x of the gradient
-        normal, which the exact faceted distance lacks (it is 0 over a facet, singular at its
-        edges). Used only in the Jacobian (:meth:`ContactState.linearised_normal`).
-        """
-        tri = self.triangles[face]
-        v = self.vertices[tri]  # (n, 3 vertices, 3)
-        f = self.face_normals[face]
-        cross = np.cross(v[:, 1] - v[:, 0], v[:, 2] - v[:, 0])
-        two_area = np.linalg.norm(cross, axis=1)
-        grads = np.stack(
-            [np.cross(f, v[:, (i + 2) % 3] - v[:, (i + 1) % 3]) for i in range(3)], axis=1
-        ) / two_area[:, None, None]  # (n, 3, 3): ∇bᵢ
-        nv = self.vertex_normals[tri]  # (n, 3, 3)
-        N = np.einsum("ni,nij->nj", bary, nv)
-        norm = np.linalg.norm(N, axis=1)
-        n = N / norm[:, None]
-        dN = np.einsum("nia,nib->nab", nv, grads)
-        P = np.eye(3)[None] - n[:, :, None] * n[:, None, :]
-        K = np.einsum("nab,nbc,ncd->nad", P, dN, P) / norm[:, None, None]
-        return 0.5 * (K + np.transpose(K, (0, 2, 1)))
+        return ClosestPoints(signed, c, face, n)
 
     def _barycentric(self, c: F64, face: I64) -> F64:
         v = self.vertices[self.triangles[face]]  # (n, 3, 3)
@@ -233,33 +196,25 @@ class BroadPhase:
     _d0: F64 | None = field(default=None, repr=False)
     _n0: F64 | None = field(default=None, repr=False)
 
-    def query(self, body: BodySurface, x: F64, normal: str = "phong", curvature: bool = False):
-        """Signed distance and normal (and ∂n/∂x with ``curvature``) of every point of ``x``,
-        searching only the candidates. Skipped points get a zero curvature."""
+    def query(self, body: BodySurface, x: F64, normal: str = "phong") -> tuple[F64, F64]:
+        """Signed distance and normal of every point of ``x``, searching only the candidates."""
         n = len(x)
         if self._x0 is None or self._x0.shape != x.shape:
-            res = body.closest(x, normal, curvature=curvature)
+            res = body.closest(x, normal)
             self._x0, self._d0, self._n0 = x.copy(), res.distance.copy(), res.normal.copy()
             self.skipped_fraction = 0.0
-            if curvature:
-                return res.distance, res.normal, res.curvature
             return res.distance, res.normal
         assert self._d0 is not None and self._n0 is not None
         bound = self._d0 - np.linalg.norm(x - self._x0, axis=1)
         near = bound <= self.band
         d = bound.copy()
         nrm = self._n0.copy()
-        K = np.zeros((n, 3, 3)) if curvature else None
         if near.any():
-            res = body.closest(x[near], normal, curvature=curvature)
+            res = body.closest(x[near], normal)
             d[near] = res.distance
             nrm[near] = res.normal
-            if curvature:
-                K[near] = res.curvature
             self._x0[near] = x[near]
             self._d0[near] = res.distance
             self._n0[near] = res.normal
         self.skipped_fraction = float(1.0 - near.sum() / n) if n else 0.0
-        if curvature:
-            return d, nrm, K
         return d, nrm

@@ -12,8 +12,8 @@ The penalty κ is a ``fem.Constant``: changing it (or the material) does not rec
 
 Contact-point rule for the P2⊕bubble displacement: ``"lumped"`` (vertices, edge midpoints and
 centroid, weights 3/60, 8/60, 27/60), measured on the tight tube (1/8 tube, 8×4 cells, κ̂ = 10,
-then augmented Lagrangian to 1 % of h): pressure error −0.05 %, 4 + 4 Newton iterations to dress,
-3 per multiplier update. ``"vertex"`` leaves the edge-midpoint nodes free: they sag 5 mm into
+then augmented Lagrangian to 1 % of h): pressure error −0.05 %, 3 + 3 Newton iterations to dress,
+2 per multiplier update. ``"vertex"`` leaves the edge-midpoint nodes free: they sag 5 mm into
 the body and the pressure is −64 % off; ``"vertex+edge"`` (equal weights) −3.8 %, ``"gauss2"``
 −2.1 % after the same multiplier updates.
 """
@@ -60,9 +60,7 @@ class ShellContact:
 
     def pressure(self, name: str = "contact_pressure") -> dolfinx.fem.Function:
         """Contact pressure as a P1 Function on the garment (for XDMF/VTX output)."""
-        return pressure.pressure_function(
-            self.state, self.traction, self.area_stretch(), name=name
-        )
+        return pressure.pressure_function(self.state, self.traction, self.area_stretch(), name=name)
 
 
 def attach(

@@ -17,7 +17,6 @@ whether the displacement ``u`` is a plain vector Function or ``ufl.split(q)[0]``
 * ``normal``   n_k, the smoothed body normal at the closest point;
 * ``u_k``      the displacement at the points when the state was refreshed, so that the gap is
   linearised about the current iterate, g ≈ g_k + n_k·(u − u_k) (exact at u = u_k);
-* ``curvature`` K_k ≈ ∂n/∂x, so that the normal is linearised too, n ≈ n_k + K_k(u − u_k);
 * ``lam``      the augmented-Lagrangian multiplier (normal traction per reference area) [Pa];
 * ``u_old``    the displacement at the last converged load step (friction slip increment).
 """
@@ -127,8 +126,6 @@ class ContactState:
         self.gap = dolfinx.fem.Function(self.Qs, name="gap")
         self.normal_fn = dolfinx.fem.Function(self.Qv, name="normal")
         self.u_k = dolfinx.fem.Function(self.Qv, name="u_k")
-        qt = basix.ufl.quadrature_element(cell, (3, 3), points=self.points, weights=self.weights)
-        self.curvature = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, qt), name="dn_dx")
         self.lam = dolfinx.fem.Function(self.Qs, name="multiplier")
         self.u_old = dolfinx.fem.Function(self.Qv, name="u_old")
         self.shrink = dolfinx.fem.Constant(mesh, 0.0)  # dressing: body shrunk by s [m]
@@ -165,11 +162,11 @@ class ContactState:
         t1 = time.perf_counter()
         if self._unique is not None:
             first, inverse = self._unique
-            d, nrm, K = self._broad.query(self.body, xq[first], self.normal, curvature=True)
+            d, nrm = self._broad.query(self.body, xq[first], self.normal)
             searched = len(first)
-            d, nrm, K = d[inverse], nrm[inverse], K[inverse]
+            d, nrm = d[inverse], nrm[inverse]
         else:
-            d, nrm, K = self._broad.query(self.body, xq, self.normal, curvature=True)
+            d, nrm = self._broad.query(self.body, xq, self.normal)
             searched = len(d)
         t2 = time.perf_counter()
         dofs = self._dofs
@@ -177,8 +174,7 @@ class ContactState:
         for k in range(3):
             self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
             self.u_k.x.array[3 * dofs + k] = uq[:, k]
-        self.curvature.x.array.reshape(-1, 9)[dofs] = K.reshape(-1, 9)
-        for f in (self.gap, self.normal_fn, self.u_k, self.curvature):
+        for f in (self.gap, self.normal_fn, self.u_k):
             f.x.scatter_forward()
         tm = self.timings
         tm.eval_s += t1 - t0
@@ -194,12 +190,6 @@ class ContactState:
     def linearised_gap(self) -> ufl.core.expr.Expr:
         """g = g_k + n_k·(u − u_k): the gap, exact at the refresh point, linear in u."""
         return self.gap + ufl.dot(self.normal_fn, self.u - self.u_k)
-
-    def linearised_normal(self) -> ufl.core.expr.Expr:
-        """n = n_k + K_k (u − u_k): the normal, exact at the refresh point; its derivative K_k
-        (the smoothed body curvature, :meth:`BodySurface.curvature`) gives the Jacobian the
-        t_N ∂n/∂u term that a frozen normal omits."""
-        return self.normal_fn + self.curvature * (self.u - self.u_k)
 
     def accept_step(self) -> None:
         """Mark the current state as converged: the friction slip restarts from here."""

@@ -83,12 +83,9 @@ def contact_residual(
     """Virtual work of the contact tractions on the test displacement v (residual sign: + internal).
 
     R_c(v) = −∫ t_N n·v dA − ∫ t_T·v dA   (over the reference area, at the contact points)
-
-    n is :meth:`ContactState.linearised_normal`, equal to n_k where the residual is evaluated:
-    its derivative adds the geometric term −t_N K δu·v to the Jacobian.
     """
     t_n = normal_traction(state, kappa)
-    form = -t_n * ufl.dot(state.linearised_normal(), v) * state.dx
+    form = -t_n * ufl.dot(state.normal_fn, v) * state.dx
     if friction is not None:
         t_t = friction_traction(state, friction.mu, friction.kappa_t, t_n)
         form += -ufl.dot(t_t, v) * state.dx
