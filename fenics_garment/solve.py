@@ -208,6 +208,7 @@ class NonlinearSolver:
     def solve(self) -> tuple[int, int]:
         """One Newton solve from the current ``model.q``; returns (iterations, reason)."""
         snes = self.problem.solver
+        snes.setConvergenceHistory(length=snes.getTolerances()[3] + 1, reset=True)
         t0 = time.perf_counter()
         self.problem.solve()
         dt = time.perf_counter() - t0
@@ -218,7 +219,24 @@ class NonlinearSolver:
         return its, reason
 
     def residual_history(self) -> np.ndarray:
+        """Residual norms ‖F(q_k)‖ of the last :meth:`solve`, k = 0 … iterations."""
         return np.asarray(self.problem.solver.getConvergenceHistory()[0])
+
+
+def convergence_rates(residuals) -> dict[str, list[float]]:
+    """Newton rate diagnostics of a residual history r_0, r_1, …
+
+    ``ratio``: r_{k+1}/r_k (→ 0 for superlinear convergence); ``quadratic``: r_{k+1}/r_k²
+    (bounded when quadratic); ``order``: log(r_{k+1}/r_k)/log(r_k/r_{k−1}) (≈ 2 when quadratic).
+    """
+    r = np.asarray(residuals, dtype=float)
+    ok = r[:-1] > 0
+    ratio = np.where(ok, r[1:] / np.where(ok, r[:-1], 1.0), np.nan)
+    quad = np.where(ok, r[1:] / np.where(ok, r[:-1], 1.0) ** 2, np.nan)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lr = np.log(ratio)
+        order = lr[1:] / lr[:-1]
+    return {"ratio": ratio.tolist(), "quadratic": quad.tolist(), "order": order.tolist()}
 
 
 @dataclass

@@ -13,10 +13,11 @@ import basix.ufl
 import numpy as np
 
 from fenics_garment._stack import MPI, PETSc, dolfinx, ufl
-from fenics_garment.contact import newton, terms
+from fenics_garment.contact import terms
 from fenics_garment.contact.primitives import cylinder
 from fenics_garment.contact.search import BodySurface
 from fenics_garment.contact.state import ContactState
+from fenics_garment.solve import NonlinearSolver
 
 
 # -- geometry ---------------------------------------------------------------------------------
@@ -155,7 +156,7 @@ class Scene:
     mesh: dolfinx.mesh.Mesh
     u: dolfinx.fem.Function
     state: ContactState
-    problem: dolfinx.fem.petsc.NonlinearProblem
+    problem: NonlinearSolver
     kappa: dolfinx.fem.Constant
     fabric: Fabric
     bcs: list = field(default_factory=list)
@@ -176,18 +177,29 @@ SNES_OPTIONS = {
 }
 
 
+@dataclass
+class MembraneModel:
+    """What :class:`NonlinearSolver` needs of a model: the unknown and the residual form."""
+
+    q: dolfinx.fem.Function
+    F: ufl.Form
+
+    def residual(self) -> ufl.Form:
+        return self.F
+
+    def jacobian(self, F: ufl.Form) -> ufl.Form:
+        return ufl.derivative(F, self.q, ufl.TrialFunction(self.q.function_space))
+
+
 def build_problem(mesh, u, energy, state, kappa, bcs, friction=None, prefix="contact_",
                   options=None):  # fmt: skip
-    """Residual = δ(membrane energy) + contact virtual work; Jacobian by UFL; hook the refresh."""
+    """Residual = δ(membrane energy) + contact virtual work; the refresh as pre-residual hook."""
     v = ufl.TestFunction(u.function_space)
     F = ufl.derivative(energy, u, v) + terms.contact_residual(state, v, kappa, friction)
     opts = dict(SNES_OPTIONS)
     opts.update(options or {})
-    problem = dolfinx.fem.petsc.NonlinearProblem(
-        F, u, bcs=bcs, petsc_options_prefix=prefix, petsc_options=opts
-    )
-    problem.callback_times = newton.add_pre_residual_hooks(problem, u, [state.refresh])
-    return problem
+    return NonlinearSolver(MembraneModel(u, F), bcs, pre_residual=[state.refresh],
+                           petsc_options=opts, prefix=prefix)  # fmt: skip
 
 
 def laplace_tube(

@@ -66,3 +66,19 @@ def icosphere(radius: float, subdivisions: int) -> Mesh:
         )  # fmt: skip
         v = np.vstack([v, mid])
     return radius * v, f
+
+
+def sphere_patch(radius: float, half_angle: float, n: int) -> Mesh:
+    """Open cube-sphere patch of a sphere about the origin around +z: the points
+    r (a, b, 1)/|(a, b, 1)| with |a|, |b| ≤ tan(half_angle), n × n quads split in two,
+    outward oriented. Its vertices lie exactly on the sphere."""
+    t = np.tan(half_angle)
+    a, b = np.meshgrid(np.linspace(-t, t, n + 1), np.linspace(-t, t, n + 1), indexing="ij")
+    v = np.column_stack([a.ravel(), b.ravel(), np.ones(a.size)])
+    v = radius * v / np.linalg.norm(v, axis=1)[:, None]
+    i, j = np.meshgrid(np.arange(n), np.arange(n), indexing="ij")
+    i, j = i.ravel(), j.ravel()
+    p00 = i * (n + 1) + j
+    p10, p01, p11 = p00 + n + 1, p00 + 1, p00 + n + 2
+    tris = np.vstack([np.column_stack([p00, p10, p11]), np.column_stack([p00, p11, p01])])
+    return v.astype(np.float64), tris.astype(np.int64)

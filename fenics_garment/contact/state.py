@@ -5,6 +5,8 @@ The contact points are the points of a quadrature rule on each garment cell (``r
 * ``"vertex"`` — the cell vertices, equal weights (nodal enforcement, lumped): measured best for
   P1 (smooth pressure, 3 Newton iterations; see STACK.md "Penalty contact of a tight tube").
 * ``"vertex+edge"`` — vertices and edge midpoints, equal weights (nodal enforcement for P2).
+* ``"lumped"`` — vertices, edge midpoints and centroid with weights 3/60, 8/60, 27/60 of the
+  area: the positive, degree-3 (P2⊕bubble mass-lumping) rule; the choice for the P2B shell.
 * ``"gauss<d>"`` — the default Gauss rule of degree ``d`` (over-constrains P1; for comparison).
 
 Every quantity lives in a quadrature-space Function on those points, so the contact terms work
@@ -46,11 +48,21 @@ def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
         edges = basix.topology(ct)[1]
         mids = np.array([0.5 * (vertices[a] + vertices[b]) for a, b in edges])
         pts = np.vstack([vertices, mids])
+    elif rule == "lumped":
+        edges = basix.topology(ct)[1]
+        mids = np.array([0.5 * (vertices[a] + vertices[b]) for a, b in edges])
+        pts = np.vstack([vertices, mids, vertices.mean(axis=0, keepdims=True)])
+        w = np.array([3.0] * 3 + [8.0] * 3 + [27.0]) / 60.0 * volume
+        if cell != "triangle":
+            raise ValueError("the 'lumped' rule is for triangles")
+        return pts, w
     elif rule.startswith("gauss"):
         pts, wts = basix.make_quadrature(ct, int(rule[5:]))
         return np.asarray(pts, dtype=np.float64), np.asarray(wts, dtype=np.float64)
     else:
-        raise ValueError(f"unknown contact rule {rule!r}: 'vertex', 'vertex+edge' or 'gauss<d>'")
+        raise ValueError(
+            f"unknown contact rule {rule!r}: 'vertex', 'vertex+edge', 'lumped' or 'gauss<d>'"
+        )
     return pts, np.full(len(pts), volume / len(pts))
 
 
@@ -74,7 +86,7 @@ class ContactState:
         u: the garment displacement as a UFL expression (a Function or ``ufl.split(q)[0]``).
         body: the body surface (replicated on every rank, search tree built once).
         offset: distance kept between the garment mid-surface and the skin, h/2 [m].
-        rule: contact-point rule (``"vertex"``, ``"vertex+edge"``, ``"gauss<d>"``).
+        rule: contact-point rule (``"vertex"``, ``"vertex+edge"``, ``"lumped"``, ``"gauss<d>"``).
         normal: ``"gradient"`` (default: consistent with the exact distance, so Newton is
             quadratic; the mid-surface is kept h/2 outside the skin, where the distance is C¹ on
             convex parts) or ``"phong"`` (continuous everywhere, also deep inside, but not the
@@ -126,9 +138,14 @@ class ContactState:
         self._dofs = self.Qs.dofmap.list[self._cells].ravel()
         self._broad = BroadPhase(band=band)
         self._unique: tuple[np.ndarray, np.ndarray] | None = None
-        if rule == "vertex":  # search each garment vertex once, not once per adjacent cell
-            nodes = mesh.geometry.dofmaps[0][self._cells][:, : len(self.points)].ravel()
-            self._unique = np.unique(nodes, return_index=True, return_inverse=True)[1:]
+        gdofs = mesh.geometry.dofmaps[0]
+        n_nodal = {"vertex": 3, "vertex+edge": 6, "lumped": 6}.get(rule, 0)
+        if 0 < n_nodal <= gdofs.shape[1]:  # points at geometry nodes: search each node once
+            nodes = gdofs[self._cells][:, :n_nodal]
+            if len(self.points) > n_nodal:  # the centroid: one point per cell
+                centre = len(mesh.geometry.x) + self._cells[:, None]
+                nodes = np.hstack([nodes, centre])
+            self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
         self.timings = Timings()
         self.u_k.x.array[:] = 0.0
 

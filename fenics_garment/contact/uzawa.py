@@ -18,7 +18,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fenics_garment._stack import MPI
-from fenics_garment.contact.newton import SolveReport
 from fenics_garment.contact.state import ContactState
 
 
@@ -48,17 +47,20 @@ def update_multiplier(state: ContactState, kappa: float) -> None:
 def augmented_lagrangian(
     state: ContactState,
     kappa: float,
-    solve: Callable[[], SolveReport],
+    solve: Callable[[], tuple[int, int]],
     *,
     tol: float,
     max_updates: int = 20,
 ) -> UzawaReport:
-    """Solve, update λ, repeat until the penetration is ≤ ``tol`` [m] (e.g. 1 % of h)."""
+    """Solve, update λ, repeat until the penetration is ≤ ``tol`` [m] (e.g. 1 % of h).
+
+    ``solve()`` returns (Newton iterations, SNES reason), e.g. ``NonlinearSolver.solve``.
+    """
     report = UzawaReport()
     for _ in range(max_updates + 1):
-        rep = solve()
-        report.newton_iterations.append(rep.iterations)
-        if not rep.converged:
+        its, reason = solve()
+        report.newton_iterations.append(its)
+        if reason <= 0:
             return report
         pen = max_penetration(state)
         report.penetration.append(pen)

@@ -1,0 +1,264 @@
+"""Verification scenes of contact on the shell, with their exact pressures.
+
+* :func:`tight_tube` — a tube of rest radius r0 pulled over a rigid cylinder of radius R > r0
+  (Laplace's law, free ends). One eighth is modelled: the quarter circle θ ∈ [0, π/2] and the
+  half length z ∈ [0, L/2], with symmetry planes x = 0, y = 0 and z = 0; these also remove the
+  zero-stiffness modes of a frictionless tube (spin, axial slide) without biasing the answer.
+* :func:`tight_cap` — a spherical cap of rest radius r0 on a rigid sphere of radius R > r0,
+  its edge held at the exact (homogeneous, equal-biaxial) solution u = (λ − 1)X, θ = 0.
+
+Both dress by shrinking the body (``ContactState.shrink``) and growing it back. The warp is a
+P2 vector Function (axial, hoop or fixed), so every scene and material shares one compiled form.
+
+Exact pressures, mid-surface contact radius R_c = R + h/2, stretch λ = R_c/r0, Green–Lagrange
+E = (λ² − 1)/2, SVK membrane (A = stiffness resultants in the local frame):
+
+* tube (free ends, S_zz = 0): E_zz = −ν_θz E, λ_z = √(1 + 2E_zz), S_θθ = E_θ h E,
+  n_θθ = (λ/λ_z) S_θθ, p_m = n_θθ/R_c;
+* cap (equal biaxial): S = (A11 + A12) E, n = S, p_m = 2n/R_c;
+* bending: the director stays radial, κ = (λ − 1)/r0 in the curved directions; the virtual
+  work of the uniform moment adds p_b = D_θθ (λ − 1)/(r0² R_c) on the tube (with λ_z = 1 in
+  the bending energy's area, since κ_zz = 0 the moment does no axial work) and
+  p_b = 2 (D11 + D12)(λ − 1)/(r0 R_c²) on the cap: both from dΠ/dR_c per deformed area.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fenics_garment._stack import MPI, dolfinx
+from fenics_garment.contact import pressure
+from fenics_garment.contact import shell as shell_contact
+from fenics_garment.contact.primitives import cylinder, sphere_patch
+from fenics_garment.contact.search import BodySurface
+from fenics_garment.shell import bcs as shell_bcs
+from fenics_garment.shell.geometry import parametric_surface_mesh
+from fenics_garment.shell.kinematics import ShellGeometry
+from fenics_garment.shell.model import ShellModel
+from fenics_garment.solve import NonlinearSolver
+
+#: Synthetic, strongly orthotropic test fabric: warp 4× stiffer than weft (not a reference value).
+ORTHO = dict(E_warp=2.0e6, E_weft=0.5e6, G12=2.0e5, B_warp=1.0e-4, B_weft=2.5e-5,
+             thickness=1.0e-3, density=0.0, nu12=0.4, name="ortho-test")  # fmt: skip
+
+
+@dataclass
+class Scene:
+    model: ShellModel
+    contact: shell_contact.ShellContact
+    solver: NonlinearSolver
+    bcs: list
+    reference: float
+    R: float
+    r0: float
+    extra: dict = field(default_factory=dict)
+
+    @property
+    def state(self):
+        return self.contact.state
+
+    @property
+    def penetration0(self) -> float:
+        """Initial penetration of the undeformed garment [m]: R_c − r0."""
+        return self.R + self.model.stiffness.thickness / 2 - self.r0
+
+
+def _warp_function(mesh, kind: str) -> dolfinx.fem.Function:
+    W = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
+    w = dolfinx.fem.Function(W, name="warp")
+
+    def field_(x):
+        r = np.hypot(x[0], x[1])
+        if kind == "axial":
+            return np.vstack([0 * x[0], 0 * x[0], 1 + 0 * x[0]])
+        if kind == "hoop":
+            return np.vstack([-x[1] / r, x[0] / r, 0 * x[0]])
+        if kind == "x":
+            return np.vstack([1 + 0 * x[0], 0 * x[0], 0 * x[0]])
+        raise ValueError(f"warp must be 'axial', 'hoop' or 'x', not {kind!r}")
+
+    w.interpolate(field_)
+    return w
+
+
+def tube_pressure(R_c: float, r0: float, s, *, warp: str = "axial", bending: bool = True):
+    """Exact free-end pressure of a tight shell tube [Pa] (module docstring).
+
+    ``s`` is the :class:`ShellStiffness`; with the warp along the axis the hoop is direction 2.
+    """
+    if warp == "axial":
+        a_tt, a_zz, a_tz, d_tt = s.A22, s.A11, s.A12, s.D22
+    else:
+        a_tt, a_zz, a_tz, d_tt = s.A11, s.A22, s.A12, s.D11
+    lam = R_c / r0
+    e = (lam**2 - 1) / 2
+    e_zz = -a_tz / a_zz * e
+    lz = np.sqrt(1 + 2 * e_zz)
+    S = (a_tt - a_tz**2 / a_zz) * e
+    p = (lam / lz) * S / R_c
+    if bending:
+        p += d_tt * (lam - 1) / (r0**2 * R_c) / lz
+    return float(p)
+
+
+def cap_pressure(R_c: float, r0: float, s, *, bending: bool = True) -> float:
+    """Exact equal-biaxial pressure of a tight shell cap [Pa]: p = 2n/R_c (+ bending)."""
+    lam = R_c / r0
+    e = (lam**2 - 1) / 2
+    p = 2 * (s.A11 + s.A12) * e / R_c
+    if bending:
+        p += 2 * (s.D11 + s.D12) * (lam - 1) / (r0 * R_c**2)
+    return float(p)
+
+
+def _solver(model, bcs, contact, options):
+    opts = {"snes_rtol": 1e-10, "snes_atol": 1e-10, "snes_stol": 0.0, "snes_max_it": 30}
+    opts.update(options or {})
+    return NonlinearSolver(model, bcs, pre_residual=[contact.refresh], petsc_options=opts,
+                           prefix=f"contact{id(model)}_")  # fmt: skip
+
+
+def tight_tube(
+    comm: MPI.Comm,
+    material,
+    *,
+    warp: str = "axial",
+    n: tuple[int, int] = (8, 4),
+    R: float = 0.1,
+    r0: float = 0.093,
+    L: float = 0.1,
+    kappa_hat: float = 10.0,
+    kappa: float | None = None,
+    rule: str = "lumped",
+    element: str | None = None,
+    n_body: int = 1021,
+    options: dict | None = None,
+) -> Scene:
+    """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
+
+    ``n`` = (cells around the quarter circle, cells along the half length).
+    """
+    mesh = parametric_surface_mesh(
+        comm, lambda t, z: np.vstack([r0 * np.cos(t), r0 * np.sin(t), z]),
+        (0.0, np.pi / 2), (0.0, L / 2), n,
+    )  # fmt: skip
+    geo = ShellGeometry.from_mesh(
+        mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
+    )
+    model = ShellModel(geo, material, element=element)
+    body = BodySurface(*cylinder(R, -L, L, n_body, 4))
+    contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
+    bcs = (
+        shell_bcs.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), 0)
+        + shell_bcs.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0), 1)
+        + shell_bcs.symmetry_plane(model, lambda x: np.isclose(x[2], 0.0), 2)
+    )
+    solver = _solver(model, bcs, contact, options)
+    s = model.stiffness
+    R_c = R + s.thickness / 2
+    ref = tube_pressure(R_c, r0, s, warp=warp)
+    return Scene(model, contact, solver, bcs, ref, R, r0,
+                 {"L": L, "warp": warp, "membrane_only": tube_pressure(R_c, r0, s, warp=warp,
+                                                                       bending=False)})  # fmt: skip
+
+
+def tight_cap(
+    comm: MPI.Comm,
+    material,
+    *,
+    n: int = 8,
+    half_angle: float = np.pi / 6,
+    R: float = 0.1,
+    r0: float = 0.093,
+    kappa_hat: float = 10.0,
+    kappa: float | None = None,
+    rule: str = "lumped",
+    element: str | None = None,
+    n_body: int = 160,
+    options: dict | None = None,
+) -> Scene:
+    """A spherical cap (a cube-sphere face patch, |x/z|, |y/z| ≤ tan(half_angle)) of rest radius
+    r0 on a rigid sphere of radius R; its edge follows the exact solution u = (λ(s) − 1)X, θ = 0,
+    with λ(s) = (R_c − s)/r0 for the body shrink s."""
+    t = np.tan(half_angle)
+
+    def cube_sphere(a, b):
+        v = np.vstack([a, b, np.ones_like(a)])
+        return r0 * v / np.linalg.norm(v, axis=0)
+
+    mesh = parametric_surface_mesh(comm, cube_sphere, (-t, t), (-t, t), (n, n))
+    geo = ShellGeometry.from_mesh(mesh, warp=_warp_function(mesh, "x"), outward=lambda x: x)
+    model = ShellModel(geo, material, element=element)
+    body = BodySurface(*sphere_patch(R, np.pi / 4, n_body))
+    contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
+    # edge: u = (λ − 1) X with a Function value, θ = 0
+    Vu, _ = model.Q.sub(0).collapse()
+    u_edge = dolfinx.fem.Function(Vu)
+    edges = shell_bcs.boundary_edges(mesh, lambda x: np.full(x.shape[1], True))
+    dofs = dolfinx.fem.locate_dofs_topological((model.Q.sub(0), Vu), 1, edges)
+    bcs = [dolfinx.fem.dirichletbc(u_edge, dofs, model.Q.sub(0))]
+    bcs += shell_bcs.fix_components(model, edges, theta=(0, 1, 2))
+    solver = _solver(model, bcs, contact, options)
+    s = model.stiffness
+    R_c = R + s.thickness / 2
+
+    def set_edge(shrink: float) -> None:
+        lam = (R_c - shrink) / r0
+        u_edge.interpolate(lambda x: (lam - 1) * x)
+
+    ref = cap_pressure(R_c, r0, s)
+    return Scene(model, contact, solver, bcs, ref, R, r0,
+                 {"set_edge": set_edge, "half_angle": half_angle,
+                  "membrane_only": cap_pressure(R_c, r0, s, bending=False)})  # fmt: skip
+
+
+@dataclass
+class DressReport:
+    iterations: list[int] = field(default_factory=list)
+    residuals: list[list[float]] = field(default_factory=list)
+
+
+def dress(scene: Scene, steps=(0.5, 0.0)) -> DressReport:
+    """Shrink the body by s = f·(R_c − r0) for each f of ``steps`` and solve (ending at f = 0)."""
+    st = scene.state
+    rep = DressReport()
+    for f in steps:
+        shrink = f * scene.penetration0
+        st.shrink.value = shrink
+        if "set_edge" in scene.extra:
+            scene.extra["set_edge"](shrink)
+        its, reason = scene.solver.solve()
+        if reason <= 0:
+            raise RuntimeError(f"dressing step f={f} failed: SNES reason {reason} after {its}")
+        rep.iterations.append(its)
+        rep.residuals.append(scene.solver.residual_history().tolist())
+        st.accept_step()
+    return rep
+
+
+def mid_pressure(scene: Scene, where=None) -> float:
+    """Contact force over deformed area, Σ t_N w dA / Σ J_s w dA, over the contact points in
+    the region far from the edges (all ranks).
+
+    Tube: z < L/4 (mid-length; the free end is at z = L/2). Cap: within half the half-angle of
+    the pole.
+    """
+    st = scene.state
+    t_n = scene.contact.traction
+    force = pressure.point_forces(st, t_n)
+    area = pressure.point_areas(st, scene.contact.area_stretch())
+    x = pressure.positions(st)
+    if where is None:
+        if "L" in scene.extra:
+            sel = x[:, 2] < scene.extra["L"] / 4
+        else:
+            ang = np.arctan2(np.hypot(x[:, 0], x[:, 1]), x[:, 2])
+            sel = ang < scene.extra["half_angle"] / 2
+    else:
+        sel = where(x)
+    comm = scene.model.geometry.mesh.comm
+    return comm.allreduce(force[sel].sum(), op=MPI.SUM) / comm.allreduce(
+        area[sel].sum(), op=MPI.SUM
+    )

@@ -1,0 +1,102 @@
+"""Contact on the shell: a :class:`ContactState` on the displacement of a ``ShellModel``.
+
+:func:`attach` builds the state on ``model.u`` (the displacement part of the mixed unknown), adds
+the contact virtual work R_c(v) = −∫ t_N n·v_u dA (at the contact points) to the model's residual
+and returns a :class:`ShellContact` whose ``refresh`` is the pre-residual hook of
+:class:`fenics_garment.solve.NonlinearSolver`::
+
+    contact = attach(model, body, kappa_hat=10.0)
+    solver = NonlinearSolver(model, bcs, pre_residual=[contact.refresh])
+
+The penalty κ is a ``fem.Constant``: changing it (or the material) does not recompile the form.
+
+Contact-point rule for the P2⊕bubble displacement: ``"lumped"`` (vertices, edge midpoints and
+centroid, weights 3/60, 8/60, 27/60), measured on the tight tube (1/8 tube, 8×4 cells, κ̂ = 10,
+then augmented Lagrangian to 1 % of h): pressure error −0.05 %, 3 + 3 Newton iterations to dress,
+2 per multiplier update. ``"vertex"`` leaves the edge-midpoint nodes free: they sag 5 mm into
+the body and the pressure is −64 % off; ``"vertex+edge"`` (equal weights) −3.8 %, ``"gauss2"``
+−2.1 % after the same multiplier updates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from fenics_garment._stack import dolfinx, ufl
+from fenics_garment.contact import pressure, terms
+from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.state import ContactState
+
+
+def area_stretch(kin) -> ufl.core.expr.Expr:
+    """J_s = da/dA = |F e₁ × F e₂| (e₁, e₂ the orthonormal reference frame of the shell)."""
+    c = ufl.cross(kin.F * kin.e1, kin.F * kin.e2)
+    return ufl.sqrt(ufl.dot(c, c))
+
+
+@dataclass
+class ShellContact:
+    """Normal contact of a shell with a body: state, penalty and the traction expression."""
+
+    model: object
+    state: ContactState
+    kappa: dolfinx.fem.Constant
+
+    def refresh(self) -> None:
+        """Pre-residual hook: gap, normal and u_k at the current iterate."""
+        self.state.refresh()
+
+    @property
+    def traction(self) -> ufl.core.expr.Expr:
+        """t_N = ⟨λ − κ g⟩₊ per reference area [Pa]."""
+        return terms.normal_traction(self.state, self.kappa)
+
+    def area_stretch(self) -> ufl.core.expr.Expr:
+        return area_stretch(self.model.kinematics())
+
+    def pressure_values(self):
+        """Pressure [Pa] at the owned contact points (force per deformed area)."""
+        return pressure.garment_pressure(self.state, self.traction, self.area_stretch())
+
+    def pressure(self, name: str = "contact_pressure") -> dolfinx.fem.Function:
+        """Contact pressure as a P1 Function on the garment (for XDMF/VTX output)."""
+        return pressure.pressure_function(self.state, self.traction, self.area_stretch(), name=name)
+
+
+def attach(
+    model,
+    body: BodySurface,
+    *,
+    kappa: float | None = None,
+    kappa_hat: float = 10.0,
+    rule: str = "lumped",
+    normal: str = "gradient",
+    band: float = 0.02,
+) -> ShellContact:
+    """Add normal contact with ``body`` to ``model`` (before the solver is built).
+
+    Args:
+        model: a :class:`fenics_garment.shell.model.ShellModel`.
+        body: the body surface.
+        kappa: penalty [Pa/m]; default :func:`terms.default_penalty` with the model's membrane
+            stiffness, its largest cell size and ``kappa_hat``.
+        rule, normal, band: see :class:`ContactState`.
+    """
+    mesh = model.geometry.mesh
+    s = model.stiffness
+    if kappa is None:
+        h_max = mesh.comm.allreduce(float(model.h_cell.x.array.max()), op=_max())
+        kappa = terms.default_penalty(s.membrane_scale, h_max, kappa_hat)
+    state = ContactState(
+        mesh, model.u, body, offset=s.thickness / 2, rule=rule, normal=normal, band=band
+    )
+    k = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa))
+    v_u = ufl.split(ufl.TestFunction(model.Q))[0]
+    model.add_residual(terms.contact_residual(state, v_u, k))
+    return ShellContact(model, state, k)
+
+
+def _max():
+    from fenics_garment._stack import MPI
+
+    return MPI.MAX
