@@ -125,25 +125,37 @@ class NonlinearSolver:
         self.residual_floor = self._measure_floor(opts)
 
     def _measure_floor(self, opts: dict) -> float:
-        """The residual's round-off floor at the reference state (λ = 0, q = 0).
+        """The round-off floor of the internal forces at the reference state (λ = 0, q = 0).
 
         Strains are differences of O(1) metric terms, so the residual has a noise of about
         ε_machine × stiffness that Newton cannot go below; an absolute tolerance under it stalls.
-        The absolute tolerance is raised to 10× this floor.
+        The absolute tolerance is raised to 10× this floor. Extra residual terms (contact) and the
+        pre-residual hooks are switched off meanwhile: a garment that starts inside the body has a
+        contact force at q = 0 that is not noise. Models without ``load_factor`` and
+        ``extra_switch`` Constants are not measured (floor 0).
         """
         model, snes = self.model, self.problem.solver
-        lam = float(model.load_factor.value)
+        switches = [getattr(model, name, None) for name in ("load_factor", "extra_switch")]
+        if any(c is None for c in switches):
+            return 0.0
+        saved = [float(c.value) for c in switches]
         q_saved = model.q.x.array.copy()
-        model.q.x.array[:] = 0.0
-        model.load_factor.value = 0.0
-        x = self.problem.x
-        dolfinx.fem.petsc.assign(model.q, x)
-        b = self.problem.b.duplicate()
-        snes.computeFunction(x, b)
-        floor = b.norm()
-        b.destroy()
-        model.q.x.array[:] = q_saved
-        model.load_factor.value = lam
+        hooks, self.hooks = self.hooks, []
+        try:
+            model.q.x.array[:] = 0.0
+            for c in switches:
+                c.value = 0.0
+            x = self.problem.x
+            dolfinx.fem.petsc.assign(model.q, x)
+            b = self.problem.b.duplicate()
+            snes.computeFunction(x, b)
+            floor = b.norm()
+            b.destroy()
+        finally:
+            self.hooks = hooks
+            model.q.x.array[:] = q_saved
+            for c, v in zip(switches, saved, strict=True):
+                c.value = v
         atol = snes.getTolerances()[1]
         snes.setTolerances(atol=max(atol, 10.0 * floor))
         return floor

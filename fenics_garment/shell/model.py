@@ -97,6 +97,7 @@ class ShellModel:
         self.stiffness = self.material.stiffness()
         self.C = terms.StiffnessConstants.create(mesh, self.stiffness, self.drilling_factor)
         self.load_factor = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
+        self.extra_switch = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
         self.h_cell = terms.cell_size(mesh)
         self.t_eff = dolfinx.fem.Constant(
             mesh, dolfinx.default_scalar_type(self.stiffness.effective_thickness)
@@ -184,7 +185,11 @@ class ShellModel:
         return c
 
     def add_residual(self, form: ufl.Form) -> None:
-        """Add a residual form (e.g. contact), linear in the test function of ``self.Q``."""
+        """Add a residual form (e.g. contact), linear in the test function of ``self.Q``.
+
+        Added forms are multiplied by ``self.extra_switch`` (1 = on), so that the solver can take
+        the round-off floor of the internal forces alone without compiling a second form.
+        """
         self._extra_residual.append(form)
 
     def external_work(self) -> ufl.Form | None:
@@ -204,7 +209,7 @@ class ShellModel:
             for p in self._follower:
                 F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
         for extra in self._extra_residual:
-            F += extra
+            F += self.extra_switch * extra
         return F
 
     def jacobian(self, F: ufl.Form) -> ufl.Form:
