@@ -12,6 +12,7 @@ GRAM_FORCE = 1e-3 * GRAVITY  # N
 
 CM = 1e-2  # m
 MM = 1e-3  # m
+INCH = 0.0254  # m, exact (international inch, 1959)
 
 
 def gf_per_cm2_to_pa(value: float) -> float:
@@ -37,6 +38,11 @@ def g_per_cm3_to_kg_per_m3(value: float) -> float:
 def cm_to_m(value: float) -> float:
     """Length: cm → m."""
     return value * CM
+
+
+def inch_to_m(value):
+    """Inches (e.g. ASTM body-measurement tables) to metres; scalars or arrays."""
+    return value * INCH
 
 
 def pa_to_kpa(value: float) -> float:

@@ -72,3 +72,31 @@ def test_crop_keeps_only_the_band():
     assert "thighs" not in b.regions and "waist" in b.regions
     # finer inside the band: shorter edges at the waist than at the hip cap
     assert b.girth("waist") == pytest.approx(b.measurements.waist_girth, rel=0.01)
+
+
+def test_astm_size_table_in_metres():
+    # ASTM D5585-11e1 Table 1, size 10: bust 37 1/4 in, under-bust 31 in, curvy waist 29 in,
+    # straight waist 30 1/2 in, mid-neck 13 7/8 in; 1 in = 0.0254 m exactly.
+    m = measurements("US10")
+    assert m.bust_girth == pytest.approx(37.25 * 0.0254, rel=1e-12)
+    assert m.underbust_girth == pytest.approx(31.0 * 0.0254, rel=1e-12)
+    assert m.waist_girth == pytest.approx(29.0 * 0.0254, rel=1e-12)
+    assert m.neck_girth == pytest.approx(13.875 * 0.0254, rel=1e-12)
+    assert measurements("US10", figure="straight").waist_girth == pytest.approx(30.5 * 0.0254)
+
+
+def test_en_size_interpolates_the_astm_torso():
+    # Bust 88 cm lies between ASTM sizes 4 (34 1/8 in) and 6 (35 1/4 in); the under-bust is
+    # interpolated linearly between 28 and 29 in at the same fraction.
+    m = measurements("88")
+    b4, b6 = 34.125 * 0.0254, 35.25 * 0.0254
+    f = (0.88 - b4) / (b6 - b4)
+    assert m.bust_girth == 0.88
+    assert m.underbust_girth == pytest.approx((28.0 + f) * 0.0254, rel=1e-12)
+    assert m.underbust_girth < m.bust_girth and m.waist_girth < m.underbust_girth
+
+
+@pytest.mark.parametrize("size", ["86", "US22", "M", ""])
+def test_unknown_size_is_a_clear_error(size):
+    with pytest.raises(KeyError, match="unknown"):
+        measurements(size)

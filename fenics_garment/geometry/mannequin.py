@@ -16,7 +16,7 @@ import numpy as np
 
 from .body import BodySurface, finish_body
 from .gmsh_utils import gmsh_session
-from .measurements import Measurements
+from .measurements import Measurements, measurements
 from .sections import SectionShape
 
 # Section proportions per level: (half width, front depth, back depth, superellipse exponent).
@@ -107,8 +107,18 @@ def _girth(m: Measurements, level: str) -> float:
     return ratio * getattr(m, name)
 
 
-def add_loft(g, secs: dict[str, tuple[float, np.ndarray]], n_pts: int = 24, solid: bool = True):
+def add_loft(
+    g,
+    secs: dict[str, tuple[float, np.ndarray]],
+    n_pts: int = 24,
+    solid: bool = True,
+    max_degree: int = -1,
+):
     """OCC loft through closed sections; each wire is a back half and a front half spline.
+
+    ``max_degree`` caps the degree of the loft surface across the sections (−1: OCC's default).
+    With OCC's default the dress's flared skirt (sections 15 cm apart below a narrow waist)
+    overshoots into a fold that crosses the garment's axis near the hem: the dress uses 3.
 
     The halves meet at the lateral points (+x and −x), so an open loft yields two faces
     (back first, then front) sharing the side lines; returns the OCC entities made.
@@ -124,7 +134,9 @@ def add_loft(g, secs: dict[str, tuple[float, np.ndarray]], n_pts: int = 24, soli
         back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
         front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
         wires.append(g.model.occ.addWire([back, front]))
-    return g.model.occ.addThruSections(wires, makeSolid=solid, makeRuled=False)
+    return g.model.occ.addThruSections(
+        wires, makeSolid=solid, makeRuled=False, maxDegree=max_degree
+    )
 
 
 def make_mannequin(
@@ -147,7 +159,7 @@ def make_mannequin(
     Runs gmsh in this process (call it on every rank, or on one and broadcast: it is
     deterministic). Returns a :class:`BodySurface`.
     """
-    m = m or Measurements()
+    m = m or measurements()
     sizes = sizes or MeshSizes()
     torso = torso_sections(m)
     legs_secs = [leg_sections(m, +1), leg_sections(m, -1)] if legs else []

@@ -5,18 +5,31 @@ for body measurement"): girths are horizontal tape measurements (the tape bridge
 girth is the perimeter of the *convex hull* of the horizontal section), heights are vertical
 distances from the floor, shoulder width is the biacromial breadth.
 
-Size codes: EN 13402-3:2017 labels women's tops by bust girth in 4 cm steps (…, 84, 88, 92, …)
-and bottoms by hip girth in 4 cm steps. The table below uses that scheme for the bust and hip
-girths. **All other numbers in it (waist, neck, limb girths, heights as fractions of stature)
-are our own illustrative, round-number proportions for an adult woman — they are NOT copied
-from the standard's tables (which we did not have) or from a survey.** For a real wearer pass
-the measured values as overrides; every field can be overridden.
+Where the numbers come from:
+
+* **Torso girths** (mid-neck, bust, under-bust, waist): ASTM D5585-11e1, "Standard Tables of
+  Body Measurements for Adult Female Misses Figure Type, Size Range 00–20", Table 1 (inch-pound
+  units), rows "Mid-Neck Girth", "Chest/Bust Girth", "Under-Bust Girth" and "Waist Girth Curvy" /
+  "Waist Girth Straight" — transcribed below in inches, converted to metres in ``units``.
+  ``measurements("US10")`` is that table's size 10; an EN 13402-3 size code (``"88"`` = bust
+  girth 88 cm, 4 cm steps) takes the bust girth from the code and the other torso girths
+  interpolated in the ASTM table at that bust girth.
+* **Hip girth** of an EN size: EN 13402-3 labels bottoms by hip girth in 4 cm steps; the pairing
+  bust 88 ↔ hip 96 (bust + 8 cm) is **our assumption**, not a table value.
+* **Everything else** (shoulder width, limb girths, the landmark heights as fractions of
+  stature) is **our own round-number proportion for an adult woman**, not from a standard or a
+  survey; limb girths scale with the hip, shoulder width with the bust. For a real wearer pass
+  measured values as overrides: every field can be overridden.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, fields, replace
 from itertools import pairwise
+
+import numpy as np
+
+from fenics_garment.units import inch_to_m
 
 # Landmark levels, bottom to top, used by the mannequin, the region tagger and the garments.
 TORSO_LEVELS = (
@@ -83,29 +96,71 @@ class Measurements:
                 raise ValueError(f"{f.name} must be positive")
 
 
-# size code -> (bust girth, hip girth) in metres, EN 13402-3 4-cm steps; the secondary girths
-# scale with the bust/hip ratio to the default (illustrative proportions, see module doc).
-_SIZE_STEPS = {"80": (0.80, 0.88), "84": (0.84, 0.92), "88": (0.88, 0.96), "92": (0.92, 1.00),
-               "96": (0.96, 1.04), "100": (1.00, 1.08), "104": (1.04, 1.12)}  # fmt: skip
+# ASTM D5585-11e1, Table 1 (inches), sizes 00 … 20: the rows this model uses.
+_ASTM_SIZES = ("00", "0", "2", "4", "6", "8", "10", "12", "14", "16", "18", "20")
+_ASTM_IN = {
+    "neck_girth": (12.375, 12.625, 12.875, 13.125, 13.375, 13.625, 13.875, 14.25, 14.625, 15.0,
+                   15.5, 16.0),  # "Mid-Neck Girth"
+    "bust_girth": (31.125, 31.75, 33.0, 34.125, 35.25, 36.25, 37.25, 38.75, 40.375, 42.125,
+                   44.0, 46.0),  # "Chest/Bust Girth"
+    "underbust_girth": (25.75, 26.5, 27.25, 28.0, 29.0, 30.0, 31.0, 32.5, 34.0, 35.75, 37.625,
+                        39.625),  # "Under-Bust Girth"
+    "waist_curvy": (23.875, 24.625, 25.375, 26.125, 27.0, 28.0, 29.0, 30.75, 32.5, 34.5, 36.75,
+                    39.0),  # "Waist Girth Curvy"
+    "waist_straight": (25.375, 26.125, 26.875, 27.625, 28.5, 29.5, 30.5, 32.25, 34.0, 36.0,
+                       38.25, 40.5),  # "Waist Girth Straight"
+}  # fmt: skip
+
+# EN 13402-3 bust-girth codes [cm] offered; hip = bust + 8 cm (our assumption, see module doc).
+_EN_BUST_CM = (80, 84, 88, 92, 96, 100, 104)
 
 
-def measurements(size: str = "88", **overrides: float) -> Measurements:
-    """Measurements for a bust-girth size code (EN 13402-3 style, cm), then ``overrides`` applied.
+def astm_table(figure: str = "curvy") -> dict[str, np.ndarray]:
+    """The ASTM D5585-11e1 torso girths in metres, one array per measurement, sizes 00 … 20."""
+    if figure not in ("curvy", "straight"):
+        raise ValueError(f"figure must be 'curvy' or 'straight', not {figure!r}")
+    table = {k: inch_to_m(np.asarray(v)) for k, v in _ASTM_IN.items() if not k.startswith("w")}
+    table["waist_girth"] = inch_to_m(np.asarray(_ASTM_IN[f"waist_{figure}"]))
+    return table
 
-    >>> measurements("92", waist_girth=0.80).waist_girth
-    0.8
+
+def _torso_girths(size: str, figure: str) -> dict[str, float]:
+    """Neck, bust, under-bust and waist girths [m] of a size code (see module doc)."""
+    table = astm_table(figure)
+    if size.upper().startswith("US"):
+        code = size[2:]
+        if code not in _ASTM_SIZES:
+            raise KeyError(
+                f"unknown ASTM D5585 size {size!r}; known: US" + ", US".join(_ASTM_SIZES)
+            )
+        i = _ASTM_SIZES.index(code)
+        return {k: float(v[i]) for k, v in table.items()}
+    if not size.isdigit() or int(size) not in _EN_BUST_CM:
+        known = ", ".join(str(b) for b in _EN_BUST_CM)
+        raise KeyError(f"unknown size {size!r}; known: EN 13402-3 bust codes {known}, "
+                       f"or ASTM D5585 sizes US00 … US20")  # fmt: skip
+    bust = int(size) / 100.0
+    b = table["bust_girth"]
+    return {k: float(np.interp(bust, b, v)) for k, v in table.items()}
+
+
+def measurements(size: str = "88", figure: str = "curvy", **overrides: float) -> Measurements:
+    """Measurements for a size code, then ``overrides`` applied (all in metres).
+
+    ``size``: an EN 13402-3 bust-girth code in cm (``"80"`` … ``"104"``) or an ASTM D5585 misses
+    size (``"US00"`` … ``"US20"``); ``figure``: the ASTM waist row, ``"curvy"`` or ``"straight"``.
+
+    >>> round(measurements("US10").bust_girth, 5)  # 37 1/4 in
+    0.94615
     """
-    if size not in _SIZE_STEPS:
-        raise KeyError(f"unknown size {size!r}; known: {', '.join(_SIZE_STEPS)}")
+    torso = _torso_girths(size, figure)
     base = Measurements()
-    bust, hip = _SIZE_STEPS[size]
-    kb, kh = bust / base.bust_girth, hip / base.hip_girth
+    kb = torso["bust_girth"] / base.bust_girth
+    hip = torso["bust_girth"] + 0.08
+    kh = hip / base.hip_girth
     scaled = {
-        "bust_girth": bust,
+        **torso,
         "hip_girth": hip,
-        "underbust_girth": base.underbust_girth * kb,
-        "waist_girth": base.waist_girth * kb,
-        "neck_girth": base.neck_girth * kb,
         "shoulder_width": base.shoulder_width * kb,
         "thigh_girth": base.thigh_girth * kh,
         "knee_girth": base.knee_girth * kh,
