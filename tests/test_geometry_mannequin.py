@@ -100,3 +100,19 @@ def test_en_size_interpolates_the_astm_torso():
 def test_unknown_size_is_a_clear_error(size):
     with pytest.raises(KeyError, match="unknown"):
         measurements(size)
+
+
+def test_second_order_body_is_closer_to_the_requested_girths():
+    # Flat triangles cut the curved surface's sections short (chord error); the order-2 body puts
+    # its mid-edge nodes on the true surface, so the error must shrink (measured at h = 5 cm:
+    # waist 0.090 % → 0.051 %).
+    m = measurements("88")
+    kw = dict(z_range=(0.95, 1.25), legs=False)
+    b1 = make_mannequin(m, MeshSizes(coarse=0.05, fine=0.05), **kw)
+    b2 = make_mannequin(m, MeshSizes(coarse=0.05, fine=0.05), order=2, **kw)
+    info = b2.check()
+    assert info["closed_manifold"] and info["components"] == 1 and info["volume"] > 0
+    for level in ("waist", "underbust"):
+        e1 = abs(b1.girth(level) / m.girth(level) - 1)
+        e2 = abs(b2.girth(level) / m.girth(level) - 1)
+        assert e2 < e1 and e2 < 0.01, (level, e1, e2)
