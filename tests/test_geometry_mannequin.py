@@ -102,17 +102,22 @@ def test_unknown_size_is_a_clear_error(size):
         measurements(size)
 
 
-def test_second_order_body_is_closer_to_the_requested_girths():
-    # Flat triangles cut the curved surface's sections short (chord error); the order-2 body puts
-    # its mid-edge nodes on the true surface, so the error must shrink (measured at h = 5 cm:
-    # waist 0.090 % → 0.051 %).
+def test_second_order_body():
+    # order 2: every 6-node triangle split in four flat ones through its mid-edge nodes (which gmsh
+    # puts on the curved loft): still one closed, outward, manifold surface with the requested
+    # girths and all regions
+    from fenics_garment.geometry.regions import REGIONS
+
     m = measurements("88")
     kw = dict(z_range=(0.95, 1.25), legs=False)
     b1 = make_mannequin(m, MeshSizes(coarse=0.05, fine=0.05), **kw)
     b2 = make_mannequin(m, MeshSizes(coarse=0.05, fine=0.05), order=2, **kw)
     info = b2.check()
     assert info["closed_manifold"] and info["components"] == 1 and info["volume"] > 0
+    assert len(b2.triangles) == 4 * len(b1.triangles)
     for level in ("waist", "underbust"):
-        e1 = abs(b1.girth(level) / m.girth(level) - 1)
-        e2 = abs(b2.girth(level) / m.girth(level) - 1)
-        assert e2 < e1 and e2 < 0.01, (level, e1, e2)
+        assert b2.girth(level) == pytest.approx(m.girth(level), rel=0.01)
+    assert {r for r in b2.regions if len(b2.triangles_of(r))} == {
+        r for r in b1.regions if len(b1.triangles_of(r))
+    }
+    assert set(b2.regions) <= set(REGIONS)
