@@ -262,3 +262,85 @@ def mid_pressure(scene: Scene, where=None) -> float:
     return comm.allreduce(force[sel].sum(), op=MPI.SUM) / comm.allreduce(
         area[sel].sum(), op=MPI.SUM
     )
+
+
+# -- capstan (Euler–Eytelwein) ----------------------------------------------------------------
+def _strip_path(s: np.ndarray, w: np.ndarray, rho: float, theta: float, tail: float):
+    """Centre line from (rho, −tail) up the tangent x = rho, around the arc φ ∈ [0, θ] of radius
+    rho, then ``tail`` along the tangent at φ = θ; w across the strip (along z)."""
+    phi = np.clip((s - tail) / rho, 0.0, theta)
+    before = np.minimum(s - tail, 0.0)  # ≤ 0 on tail A
+    after = np.maximum(s - tail - rho * theta, 0.0)  # ≥ 0 on tail B
+    x = rho * np.cos(phi) - after * np.sin(theta)
+    y = rho * np.sin(phi) + before + after * np.cos(theta)
+    return np.vstack([x, y, w])
+
+
+def capstan_strip(
+    comm: MPI.Comm,
+    *,
+    mu: float,
+    theta: float = np.pi / 2,
+    R: float = 0.1,
+    tail: float = 0.05,
+    width: float = 0.02,
+    n: tuple[int, int] = (80, 2),
+    E: float = 1.0e6,
+    thickness: float = 1.0e-3,
+    kappa_hat: float = 10.0,
+    options: dict | None = None,
+) -> Scene:
+    """A shell strip (ν = 0) wrapped on a rigid cylinder by θ = π/2, with straight tails.
+
+    End A (tail along y, at y = −tail) is clamped; end B (tail along −x) has its rotations fixed
+    and is pulled along its tail, u_x = −δ, u_y = 0 (``extra["delta"]``, a Constant). The friction
+    coefficient is ``contact.friction.mu`` (a Constant: set it to 0 to pre-tension the strip).
+    The reference value is the capstan ratio e^{μθ} of the tail tensions at slip.
+    """
+    from fenics_garment.materials import Isotropic
+
+    if not np.isclose(theta, np.pi / 2):
+        raise ValueError("the end-B conditions assume θ = π/2")
+    rho = R + thickness / 2
+    total = 2 * tail + rho * theta
+    mesh = parametric_surface_mesh(
+        comm, lambda s, w: _strip_path(s, w, rho, theta, tail),
+        (0.0, total), (-width / 2, width / 2), n,
+    )  # fmt: skip
+    geo = ShellGeometry.from_mesh(
+        mesh, warp=(0.0, 0.0, 1.0), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
+    )
+    model = ShellModel(geo, Isotropic(E=E, nu=0.0, thickness=thickness))
+    body = BodySurface(*cylinder(R, -0.05, 0.05, 2048, 2))
+    contact = shell_contact.attach(model, body, kappa_hat=kappa_hat, mu=mu, band=0.01)
+    delta = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
+    end_b = lambda x: np.isclose(x[0], -tail)  # noqa: E731
+    bcs = shell_bcs.clamped(model, lambda x: np.isclose(x[1], -tail))
+    bcs += shell_bcs.fix_components(model, end_b, u=(0,), value=delta)
+    bcs += shell_bcs.fix_components(model, end_b, u=(1,), theta=(0, 1, 2))
+    solver = _solver(model, bcs, contact, options)
+    extra = {"delta": delta, "tail": tail, "rho": rho, "theta": theta, "width": width,
+             "EA": E * thickness * width}  # fmt: skip
+    return Scene(model, contact, solver, bcs, float(np.exp(mu * theta)), R, rho, extra)
+
+
+def tail_tensions(scene: Scene) -> tuple[float, float]:
+    """Tension forces [N] in the held tail A and the pulled tail B, from their stretch.
+
+    A straight, contact-free tail of this ν = 0 SVK strip is in uniaxial tension: stretch
+    λ = ℓ/L between two points on its centre line, Green strain E = (λ² − 1)/2, force
+    T = λ · E h w · E (first Piola–Kirchhoff force per reference width × width).
+    """
+    from fenics_garment.shell.model import evaluate_at_points
+
+    tail, rho, th = scene.extra["tail"], scene.extra["rho"], scene.extra["theta"]
+    s = np.array(
+        [0.3 * tail, 0.7 * tail, 2 * tail + rho * th - 0.7 * tail, 2 * tail + rho * th - 0.3 * tail]
+    )
+    X = _strip_path(s, np.zeros(4), rho, th, tail).T
+    x = X + evaluate_at_points(scene.model.displacement(), X)
+    out = []
+    for i, j in ((0, 1), (2, 3)):
+        lam = np.linalg.norm(x[j] - x[i]) / np.linalg.norm(X[j] - X[i])
+        out.append(lam * scene.extra["EA"] * (lam**2 - 1) / 2)
+    return out[0], out[1]

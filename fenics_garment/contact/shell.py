@@ -41,10 +41,15 @@ class ShellContact:
     model: object
     state: ContactState
     kappa: dolfinx.fem.Constant
+    friction: terms.Friction | None = None
 
     def refresh(self) -> None:
         """Pre-residual hook: gap, normal and u_k at the current iterate."""
         self.state.refresh()
+
+    def accept_step(self) -> None:
+        """After a converged load step: the slip increment of friction restarts from here."""
+        self.state.accept_step()
 
     @property
     def traction(self) -> ufl.core.expr.Expr:
@@ -72,6 +77,7 @@ def attach(
     rule: str = "lumped",
     normal: str = "gradient",
     band: float = 0.02,
+    mu: float | None = None,
 ) -> ShellContact:
     """Add normal contact with ``body`` to ``model`` (before the solver is built).
 
@@ -81,6 +87,9 @@ def attach(
         kappa: penalty [Pa/m]; default :func:`terms.default_penalty` with the model's membrane
             stiffness, its largest cell size and ``kappa_hat``.
         rule, normal, band: see :class:`ContactState`.
+        mu: Coulomb friction coefficient (None: frictionless, no friction term is assembled). It
+            becomes ``contact.friction.mu``, a Constant; the stick penalty κ_T is κ. Call
+            ``contact.accept_step()`` after each converged load step.
     """
     mesh = model.geometry.mesh
     s = model.stiffness
@@ -91,9 +100,12 @@ def attach(
         mesh, model.u, body, offset=s.thickness / 2, rule=rule, normal=normal, band=band
     )
     k = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa))
+    friction = None
+    if mu is not None:
+        friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), k)
     v_u = ufl.split(ufl.TestFunction(model.Q))[0]
-    model.add_residual(terms.contact_residual(state, v_u, k))
-    return ShellContact(model, state, k)
+    model.add_residual(terms.contact_residual(state, v_u, k, friction))
+    return ShellContact(model, state, k, friction)
 
 
 def _max():
