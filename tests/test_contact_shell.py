@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from fenics_garment.contact import scenes, terms, uzawa
+from fenics_garment.contact import pressure, scenes, terms, uzawa
 from fenics_garment.materials import Fabric, Isotropic
 from fenics_garment.solve import convergence_rates
 
@@ -54,6 +54,32 @@ def test_laplace_tube_on_the_shell(material, warp):
     )
     assert abs(p / ref - 1) < 0.01
     assert al.penetration[-1] <= 0.01 * H
+
+
+def test_pressure_on_the_body():
+    """Garment pressure onto the body: the force-conserving push keeps the total force to
+    round-off; the pulled map equals Laplace's pressure away from the tube's edges."""
+    L = 0.1
+    scene = scenes.tight_tube(MPI.COMM_WORLD, ISO, n_body_z=16)  # body vertices every L/8 in z
+    dress_and_tighten(scene)
+    st, t_n = scene.state, scene.contact.traction
+    v, t = st.body.vertices, st.body.triangles
+    area = 0.5 * np.linalg.norm(np.cross(v[t[:, 1]] - v[t[:, 0]], v[t[:, 2]] - v[t[:, 0]]), axis=1)
+    lumped = np.zeros(len(v))
+    np.add.at(lumped, t.ravel(), np.repeat(area / 3.0, 3))
+    total = MPI.COMM_WORLD.allreduce(pressure.point_forces(st, t_n).sum(), op=MPI.SUM)
+    pushed = pressure.body_pressure(st, t_n, st.body)
+    assert (pushed * lumped).sum() == pytest.approx(total, rel=1e-12)
+    p_map = pressure.body_pressure_map(
+        scene.contact.pressure(), scene.model.displacement(), v, reach=2 * H
+    )
+    ang = np.arctan2(v[:, 1], v[:, 0])
+    inner = (v[:, 2] > 0.01) & (v[:, 2] < L / 4) & (ang > 0.1) & (ang < np.pi / 2 - 0.1)
+    assert inner.sum() > 100
+    err = p_map[inner] / scene.reference - 1
+    print(f"\nbody pressure map, {inner.sum()} vertices: error {err.min():+.3%} … {err.max():+.3%}")
+    assert np.abs(err).max() < 0.01
+    assert np.all(p_map[v[:, 2] < -0.01] == 0.0)  # no garment there (z < 0 is the mirror half)
 
 
 def test_newton_is_quadratic_and_augmented_lagrangian_penetration():

@@ -5,9 +5,18 @@ On the garment, at every contact point: p = t_N / J_s, where t_N is the normal t
 J_s = da/dA the garment's area stretch there. (Dividing by the reference area instead is ≈ +5 %
 off on a tight tube: STACK.md.)
 
-On the body: every contact point carries the force f = t_N w dA (w dA its reference area); the
-force is spread to the three vertices of the body triangle that holds its closest point with
-the barycentric weights, summed over ranks, and divided by the vertex's lumped (one-third) area.
+On the body, two transfers:
+
+* :func:`body_pressure` (force-conserving "push"): every contact point carries the force
+  f = t_N w dA (w dA its reference area); the force is spread to the three vertices of the body
+  triangle that holds its closest point with the barycentric weights, summed over ranks, and
+  divided by the vertex's lumped (one-third) area. The total force is exact — use it for forces
+  per region — but the field is only smooth where the body's triangles are larger than the
+  spacing of the contact points (measured on the tight tube with a 0.6 mm body mesh under 18 mm
+  garment cells: −100 … +790 % vertex to vertex).
+* :func:`body_pressure_map` ("pull"): each body vertex takes the garment's P1 pressure at its
+  closest point on the deformed garment — smooth at any relative resolution; for pictures and
+  per-vertex statistics.
 """
 
 from __future__ import annotations
@@ -122,3 +131,36 @@ def pressure_function(
     out.x.array[:] = np.divide(f.x.array, a.x.array, out=np.zeros_like(f.x.array),
                                where=a.x.array > 0)  # fmt: skip
     return out
+
+
+def body_pressure_map(
+    p: dolfinx.fem.Function, u: dolfinx.fem.Function, body_vertices: F64, reach: float
+) -> F64:
+    """Garment pressure ``p`` (P1) pulled onto body vertices, identical on every rank [Pa].
+
+    Each body vertex takes p at its closest point on the deformed garment (P1 vertices X + u,
+    gathered on every rank); vertices farther than ``reach`` [m] from the garment get 0.
+    ``u`` is the garment displacement (any vector Lagrange Function on the same mesh).
+    """
+    V = p.function_space
+    mesh = V.mesh
+    comm = mesh.comm
+    W = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
+    w = dolfinx.fem.Function(W)
+    w.interpolate(u)
+    imap = V.dofmap.index_map
+    n_owned = imap.size_local
+    x = V.tabulate_dof_coordinates()[:n_owned] + w.x.array.reshape(-1, 3)[:n_owned]
+    gidx = imap.local_range[0] + np.arange(n_owned)
+    n_cells = mesh.topology.index_map(mesh.topology.dim).size_local
+    cells = imap.local_to_global(V.dofmap.list[:n_cells].ravel()).reshape(-1, 3)
+    n_global = imap.size_global
+    xg = np.zeros((n_global, 3))
+    pg = np.zeros(n_global)
+    for gi, xi, pi in comm.allgather((gidx, x, p.x.array[:n_owned])):
+        xg[gi], pg[gi] = xi, pi
+    garment = BodySurface(xg, np.vstack(comm.allgather(cells)))
+    res = garment.closest(np.asarray(body_vertices, dtype=np.float64))
+    bary = garment._barycentric(res.point, res.face)
+    values = np.einsum("ij,ij->i", bary, pg[garment.triangles[res.face]])
+    return np.where(np.abs(res.distance) <= reach, values, 0.0)

@@ -134,11 +134,13 @@ def tight_tube(
     rule: str = "lumped",
     element: str | None = None,
     n_body: int = 1021,
+    n_body_z: int = 4,
     options: dict | None = None,
 ) -> Scene:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
 
-    ``n`` = (cells around the quarter circle, cells along the half length).
+    ``n`` = (cells around the quarter circle, cells along the half length); the body cylinder
+    (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along.
     """
     mesh = parametric_surface_mesh(
         comm, lambda t, z: np.vstack([r0 * np.cos(t), r0 * np.sin(t), z]),
@@ -148,7 +150,7 @@ def tight_tube(
         mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
     )
     model = ShellModel(geo, material, element=element)
-    body = BodySurface(*cylinder(R, -L, L, n_body, 4))
+    body = BodySurface(*cylinder(R, -L, L, n_body, n_body_z))
     contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
     bcs = (
         shell_bcs.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), 0)
