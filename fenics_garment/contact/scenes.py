@@ -83,6 +83,32 @@ def _warp_function(mesh, kind: str) -> dolfinx.fem.Function:
     return w
 
 
+def _distort_tube_mesh(mesh, r0: float, L: float, n: tuple[int, int], amount: float) -> None:
+    """Move the interior vertices of a P2 tube mesh within the cylinder by up to ``amount`` of a
+    cell (a fixed pseudo-random hash of their position, so ranks agree) and put each edge node
+    back at its edge's parameter midpoint: straight-sided (in (θ, z)) but distorted triangles on
+    the exact surface."""
+    dt, dz = np.pi / 2 / n[0], L / 2 / n[1]
+    x = mesh.geometry.x
+    t, z = np.arctan2(x[:, 1], x[:, 0]), x[:, 2].copy()
+
+    def hash01(a, b, seed):
+        return np.modf(np.abs(np.sin(12.9898 * a + 78.233 * b + seed) * 43758.5453))[0] - 0.5
+
+    inside = (t > 1e-9) & (t < np.pi / 2 - 1e-9) & (z > 1e-12) & (z < L / 2 - 1e-12)
+    cells = mesh.geometry.dofmaps[0]
+    verts = np.unique(cells[:, :3])
+    tv, zv = t.copy(), z.copy()
+    i = verts[inside[verts]]
+    tv[i] += amount * dt * hash01(t[i] / dt, z[i] / dz, 0.0)
+    zv[i] += amount * dz * hash01(t[i] / dt, z[i] / dz, 1.7)
+    for node, (a, b) in ((3, (1, 2)), (4, (0, 2)), (5, (0, 1))):  # basix P2 triangle edges
+        k = cells[:, node]
+        tv[k] = 0.5 * (tv[cells[:, a]] + tv[cells[:, b]])
+        zv[k] = 0.5 * (zv[cells[:, a]] + zv[cells[:, b]])
+    x[:, 0], x[:, 1], x[:, 2] = r0 * np.cos(tv), r0 * np.sin(tv), zv
+
+
 def tube_pressure(R_c: float, r0: float, s, *, warp: str = "axial", bending: bool = True):
     """Exact free-end pressure of a tight shell tube [Pa] (module docstring).
 
@@ -135,17 +161,22 @@ def tight_tube(
     element: str | None = None,
     n_body: int = 1021,
     n_body_z: int = 4,
+    distortion: float = 0.0,
     options: dict | None = None,
 ) -> Scene:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
 
     ``n`` = (cells around the quarter circle, cells along the half length); the body cylinder
-    (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along.
+    (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along. ``distortion`` moves the
+    interior nodes within the surface by up to that fraction of a cell (pseudo-random, fixed):
+    the geometry stays exact, the triangles get distorted.
     """
     mesh = parametric_surface_mesh(
         comm, lambda t, z: np.vstack([r0 * np.cos(t), r0 * np.sin(t), z]),
         (0.0, np.pi / 2), (0.0, L / 2), n,
     )  # fmt: skip
+    if distortion:
+        _distort_tube_mesh(mesh, r0, L, n, distortion)
     geo = ShellGeometry.from_mesh(
         mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
     )
