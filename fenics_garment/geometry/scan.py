@@ -40,11 +40,26 @@ def read_polygons(path: str | Path) -> tuple[Array, npt.NDArray[np.int64]]:
     """Vertices and triangles (quads and n-gons fan-split) of any meshio-readable surface."""
     import meshio
 
-    m = meshio.read(path)
-    blocks = [c.data for c in m.cells if c.dim == 2]
-    if not blocks:
-        raise ScanError(f"{path}: no surface cells", "expected triangles, quads or polygons")
-    return np.asarray(m.points[:, :3], dtype=np.float64), srf.triangulate(blocks)
+    p = Path(path)
+    if not p.is_file():
+        raise ScanError(f"{p}: no such file", "check the path (relative to the working directory)")
+    try:
+        m = meshio.read(p)
+    except Exception as e:  # meshio raises ReadError, ValueError, IndexError … on broken files
+        raise ScanError(
+            f"{p}: not a readable mesh ({type(e).__name__}: {e})",
+            "expected OBJ, PLY, STL, MSH or another meshio format; is the file truncated?",
+        ) from e
+    blocks = [c.data for c in m.cells if c.dim == 2 and len(c.data)]
+    if not blocks or len(m.points) == 0:
+        raise ScanError(f"{p}: no surface cells", "expected triangles, quads or polygons")
+    v = np.asarray(m.points[:, :3], dtype=np.float64)
+    if not np.all(np.isfinite(v)):
+        raise ScanError(f"{p}: {int((~np.isfinite(v)).any(axis=1).sum())} vertices are NaN/Inf")
+    t = srf.triangulate(blocks)
+    if t.min() < 0 or t.max() >= len(v):
+        raise ScanError(f"{p}: faces refer to vertices that do not exist (file corrupted?)")
+    return v, t
 
 
 def detect_units(extent: float) -> str:
@@ -84,6 +99,12 @@ def clean_surface(
         raise ScanError(f"unknown units {units!r}", "use 'm', 'cm' or 'mm'")
     v = vertices * _UNITS[units]
     report["units"] = units
+    size = extent * _UNITS[units]
+    if not 0.2 <= size <= 2.6:  # a torso part … a tall adult
+        raise ScanError(
+            f"the scan is {size:.4g} m across in {units!r}: not a human body",
+            "give the units explicitly (units='mm', 'cm' or 'm')",
+        )
     n0 = len(v)
     v, t = srf.merge_duplicate_vertices(v, triangles, tol=1e-6 * extent * _UNITS[units])
     t = srf.drop_degenerate(t)
