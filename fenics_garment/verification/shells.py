@@ -139,7 +139,7 @@ def pinched_cylinder(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD
     )  # fmt: skip
     model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)),
                        Isotropic(E=3e6, nu=0.3, thickness=3.0), element=element)  # fmt: skip
-    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], L / 2), u=(0, 2))
+    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], L / 2), u=(0, 2), theta=(1,))
            + B.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0), axis=1)
            + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0)
            + B.symmetry_plane(model, lambda x: np.abs(x[2]) < 1e-9, axis=2))  # fmt: skip
