@@ -110,13 +110,16 @@ def scordelis_lo(
     (MacNeal & Harder, Finite Elem. Anal. Des. 1 (1985) 3–20, Table/Fig. 4; the value of the
     "standard set of problems", R=25, L=50, φ=40°, t=0.25, E=4.32e8, ν=0, 90 per unit area).
 
-    For a thickness sweep, ``thickness`` ≠ 0.25 scales the load by (t/0.25)³ and the value
-    returned is w·(0.25/t)³ (equal to w at t = 0.25); no published value exists for other
-    thicknesses, so the reference is then NaN and the caller compares with a finer mesh.
+    For a thickness sweep, ``thickness`` ≠ 0.25 returns the deflection under the load
+    90·(t/0.25)³ (constant if the roof were purely bending-dominated; equal to w at t = 0.25). No
+    published value exists for other thicknesses, so the reference is then NaN and the caller
+    compares with a finer mesh. The load actually applied is LINEAR_SCALE·90·(t/0.25)² (w/t stays
+    below ~1e-3, and the load stays above the round-off floor of the membrane forces, which
+    scales with t); the value is scaled by linearity.
     """
     t0 = time.perf_counter()
     R, L, phi = 25.0, 50.0, math.radians(40.0)
-    scale = (thickness / 0.25) ** 3
+    scale = (thickness / 0.25) ** 2
     mesh = parametric_surface_mesh(
         comm, lambda a, y: np.array([R * np.sin(a), y, R * np.cos(a)]), (0, phi), (0, L / 2), (n, n)
     )
@@ -129,8 +132,8 @@ def scordelis_lo(
     solver = _solve(model, bcs, 1)
     w = evaluate_at_points(model.displacement(), [[R * math.sin(phi), L / 2, R * math.cos(phi)]])
     reference = 0.3024 if thickness == 0.25 else math.nan
-    return _result("scordelis-lo", model, solver, -w[0, 2] / (scale * LINEAR_SCALE), reference,
-                   t0, thickness=thickness)  # fmt: skip
+    value = -w[0, 2] / (scale * LINEAR_SCALE) * (thickness / 0.25) ** 3
+    return _result("scordelis-lo", model, solver, value, reference, t0, thickness=thickness)
 
 
 def kirchhoff_limit(model: ShellModel, factor: float = 100.0) -> None:
