@@ -5,16 +5,18 @@ import pytest
 
 from fenics_garment.verification import shells
 
-# (case, mesh parameter, tolerance on |relative error|). Measured on this machine:
-# Scordelis–Lo 8×8 −0.55 %; clamped plate 16×16 (t/a = 1e-3) −0.87 %; simply supported 16×16
-# −0.55 %; pinched cylinder 8×8 −2.55 % (16×16 +2.29 %: the Reissner–Mindlin point-load
-# singularity); pinched hemisphere 16×16 −2.65 %.
+# (case, mesh parameter, tolerance on |relative error|). Measured on this machine (P2B-P2B):
+# Scordelis–Lo 8×8 −0.08 %; clamped plate 16×16 (t/a = 1e-3) −0.32 %; simply supported 16×16
+# −0.45 %; pinched cylinder 16×16, Kirchhoff limit (shear ×100, see
+# ``shells.kirchhoff_limit``) +0.12 % (32×32 +0.19 %; the Reissner–Mindlin value is ≈ +1.7–2 %
+# above Flügge's thin-shell reference: the point-load shear singularity); pinched hemisphere
+# 32×32 +0.40 % against 0.093 (8×8 −15.0 %, 16×16 −1.86 %: membrane locking on coarse meshes).
 LINEAR = [
-    ("scordelis-lo", 8, 0.01),
-    ("plate-clamped", 16, 0.015),
-    ("plate-simply-supported", 16, 0.01),
-    ("pinched-cylinder", 8, 0.03),
-    ("pinched-hemisphere", 16, 0.035),
+    ("scordelis-lo", 8, 0.005),
+    ("plate-clamped", 16, 0.006),
+    ("plate-simply-supported", 16, 0.006),
+    ("pinched-cylinder", 16, 0.005),
+    ("pinched-hemisphere", 32, 0.01),
 ]
 
 
@@ -26,7 +28,8 @@ def test_linear_benchmark(case, n, tol):
 
 
 def test_clamped_plate_converges():
-    """The clamped-plate error falls by more than 4× per mesh halving (rate > 2) at t/a = 1e-2."""
+    """The clamped-plate error falls by more than 4× per mesh halving at t/a = 1e-2 (measured
+    −2.78 → −0.33 %)."""
     errors = [abs(shells.square_plate(n, "clamped", thickness=1e-2).rel_error) for n in (4, 8)]
     assert errors[1] < errors[0] / 4
 
@@ -48,3 +51,16 @@ def test_sze_rollup_closes_the_circle():
     r = shells.cantilever_rollup(16)
     assert abs(r.rel_error) < 0.005
     assert abs(r.extra["w_tip"]) < 0.005 * 12.0
+
+
+@pytest.mark.slow
+def test_sze_slit_annulus():
+    """Sze et al. 2004 §3.3 at q_max = 0.8: w_B = 17.528 (outer radius), w_A = 13.891 (inner).
+
+    Measured: 8 (4×32 cells ×2): w_B −1.14 %, w_A −1.34 % (≈ 17 s, 53 load steps, 348 Newton
+    iterations); 16: −0.37 %, −0.46 %.
+    """
+    r = shells.slit_annular_plate(8)
+    print(f"w_B {r.value:.4f} ({100 * r.rel_error:+.2f} %), w_A {r.extra['w_A']:.4f}")
+    assert abs(r.rel_error) < 0.02
+    assert abs(r.extra["w_A_rel_error"]) < 0.02

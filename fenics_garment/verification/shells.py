@@ -92,44 +92,79 @@ def select_edges(mesh, where, cell_side=None) -> np.ndarray:
     return np.array(keep, dtype=np.int32)
 
 
-def _solve(model, bcs, steps, point_loads=None, options=None):
+def _solve(model, bcs, steps, point_loads=None, options=None, **stepper):
     solver = NonlinearSolver(model, bcs, point_loads=point_loads, petsc_options=options)
-    LoadStepper(solver, steps=steps).run()
+    LoadStepper(solver, steps=steps, **stepper).run()
     return solver
 
 
 # ---------------------------------------------------------------------------------------------
 # Linear cases
 # ---------------------------------------------------------------------------------------------
-def scordelis_lo(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD) -> CaseResult:
+def scordelis_lo(
+    n: int = 8, element: str | None = None, thickness: float = 0.25, comm=MPI.COMM_WORLD
+) -> CaseResult:
     """Scordelis–Lo roof under self weight; quarter model.
 
     Reference: vertical displacement at the mid-point of the free edge 0.3024
     (MacNeal & Harder, Finite Elem. Anal. Des. 1 (1985) 3–20, Table/Fig. 4; the value of the
     "standard set of problems", R=25, L=50, φ=40°, t=0.25, E=4.32e8, ν=0, 90 per unit area).
+
+    For a thickness sweep, ``thickness`` ≠ 0.25 returns the deflection under the load
+    90·(t/0.25)³ (constant if the roof were purely bending-dominated; equal to w at t = 0.25). No
+    published value exists for other thicknesses, so the reference is then NaN and the caller
+    compares with a finer mesh. The load actually applied is LINEAR_SCALE·90·(t/0.25)² (w/t stays
+    below ~1e-3, and the load stays above the round-off floor of the membrane forces, which
+    scales with t); the value is scaled by linearity.
     """
     t0 = time.perf_counter()
     R, L, phi = 25.0, 50.0, math.radians(40.0)
+    scale = (thickness / 0.25) ** 2
     mesh = parametric_surface_mesh(
         comm, lambda a, y: np.array([R * np.sin(a), y, R * np.cos(a)]), (0, phi), (0, L / 2), (n, n)
     )
-    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)),
-                       Isotropic(E=4.32e8, nu=0.0, thickness=0.25), element=element)  # fmt: skip
-    model.add_distributed_load((0.0, 0.0, -90.0 * LINEAR_SCALE))
+    material = Isotropic(E=4.32e8, nu=0.0, thickness=thickness)
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
+    model.add_distributed_load((0.0, 0.0, -90.0 * scale * LINEAR_SCALE))
     bcs = (B.fix_components(model, lambda x: np.isclose(x[1], 0.0), u=(0, 2))
            + B.symmetry_plane(model, lambda x: np.isclose(x[1], L / 2), axis=1)
            + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0))  # fmt: skip
     solver = _solve(model, bcs, 1)
     w = evaluate_at_points(model.displacement(), [[R * math.sin(phi), L / 2, R * math.cos(phi)]])
-    return _result("scordelis-lo", model, solver, -w[0, 2] / LINEAR_SCALE, 0.3024, t0)
+    reference = 0.3024 if thickness == 0.25 else math.nan
+    value = -w[0, 2] / (scale * LINEAR_SCALE) * (thickness / 0.25) ** 3
+    return _result("scordelis-lo", model, solver, value, reference, t0, thickness=thickness)
 
 
-def pinched_cylinder(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD) -> CaseResult:
+def kirchhoff_limit(model: ShellModel, factor: float = 100.0) -> None:
+    """Stiffen the transverse shear by ``factor``: the Kirchhoff–Love limit of the same model.
+
+    For comparing with a thin-shell (Kirchhoff–Love) reference where the Reissner–Mindlin answer
+    differs physically, e.g. under a point load, where the RM deflection is logarithmically
+    singular. The PSRI weight α = t_eff²/h² measures the bending/shear stiffness ratio D/(S h²)
+    ∝ t²/h², so t_eff is divided by √factor to keep α consistent with the stiffened shear.
+    """
+    for S in (model.C.S1, model.C.S2):
+        S.value = float(S.value) * factor
+    model.t_eff.value = float(model.t_eff.value) / math.sqrt(factor)
+
+
+def pinched_cylinder(
+    n: int = 8, element: str | None = None, kirchhoff: bool = True, comm=MPI.COMM_WORLD
+) -> CaseResult:
     """Pinched cylinder with rigid end diaphragms; octant model.
 
     Reference: radial displacement under the load 1.82488e-5 (Flügge's series solution as quoted by
     MacNeal & Harder 1985 and Belytschko et al., CMAME 51 (1985) 221–258; R=300, L=600, t=3,
-    E=3e6, ν=0.3, P=1).
+    E=3e6, ν=0.3, P=1). Rigid diaphragm (Belytschko et al. 1985): u_x = u_z = θ_y = 0.
+
+    The reference is a Kirchhoff–Love (Flügge) value. The Reissner–Mindlin shell adds the
+    transverse-shear deflection under the point load, which is logarithmically singular: measured
+    (P2B-P2B) +2.0 / +1.8 / +1.7 % at n = 32 / 48 / 64, and the fully integrated element
+    approaches it from below (+1.4 % at n = 64), while the symmetry, diaphragm and load-split
+    conditions and the drilling stiffness change it by < 0.02 %. With ``kirchhoff=True`` (default)
+    the shear is stiffened 100× (:func:`kirchhoff_limit`): +0.12 / +0.19 / +0.17 % at
+    n = 16 / 32 / 64.
     """
     t0 = time.perf_counter()
     R, L = 300.0, 600.0
@@ -139,14 +174,16 @@ def pinched_cylinder(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD
     )  # fmt: skip
     model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)),
                        Isotropic(E=3e6, nu=0.3, thickness=3.0), element=element)  # fmt: skip
-    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], L / 2), u=(0, 2))
+    if kirchhoff:
+        kirchhoff_limit(model)
+    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], L / 2), u=(0, 2), theta=(1,))
            + B.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0), axis=1)
            + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0)
            + B.symmetry_plane(model, lambda x: np.abs(x[2]) < 1e-9, axis=2))  # fmt: skip
     # P = 1 gives w/t ≈ 6e-6: already linear, no scaling needed.
     solver = _solve(model, bcs, 1, point_loads=[PointLoad((0.0, 0.0, R), (0.0, 0.0, -0.25))])
     w = evaluate_at_points(model.displacement(), [[0.0, 0.0, R]])
-    return _result("pinched-cylinder", model, solver, -w[0, 2], 1.82488e-5, t0)
+    return _result("pinched-cylinder", model, solver, -w[0, 2], 1.82488e-5, t0, kirchhoff=kirchhoff)
 
 
 def pinched_hemisphere(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD) -> CaseResult:
@@ -281,7 +318,7 @@ def cantilever_rollup(
 
 
 def slit_annular_plate(
-    n: int = 8, element: str | None = None, steps: int = 6, comm=MPI.COMM_WORLD
+    n: int = 8, element: str | None = None, steps: int = 2500, comm=MPI.COMM_WORLD
 ) -> CaseResult:
     """Sze et al. 2004, §3.3: slit annular plate lifted by a line load (Ri=6, Ro=10, h=0.03,
     E=21e6, ν=0, q_max=0.8 per unit length). Reference at q_max: w_A = 13.891 (inner radius),
@@ -300,7 +337,10 @@ def slit_annular_plate(
     ds = edge_measure(mesh, on_slit, lambda c: c[1] < 0)  # the φ = 2π lip
     model.add_edge_load((0.0, 0.0, 0.8), ds)
     bcs = B.clamped(model, clamped_lip)
-    solver = _solve(model, bcs, steps)
+    # The flat plate has no out-of-plane stiffness from membrane action at q = 0: the first linear
+    # predictor of a step λ > 1e-3 lifts the lip by ≳ 20 t and Newton diverges. Start at λ = 4e-4
+    # (w ≈ t) and let the steps grow while Newton needs ≤ 6 iterations (it needs 5–8 throughout).
+    solver = _solve(model, bcs, steps, grow_below=6, max_cuts=10, min_step=1e-8)
     # Evaluate on the loaded lip: points just below y = 0 belong to its cells.
     eps = 1e-9
     disp = model.displacement()
