@@ -4,9 +4,9 @@ Tight isotropic tube on a rigid cylinder (Laplace's law, contact/scenes.py), dre
 penalty and then driven by augmented-Lagrangian updates to a penetration of 1 % of h. Every κ̂
 must give Laplace's pressure within 1 %, never a NaN or a silent failure: a penalty too soft to
 reach the penetration tolerance in the allowed updates must say so (``converged`` False, its
-penetration reported). Measured: κ̂ = 1e-2 stops after 50 updates at 8.9 % h penetration and
-−0.66 %; 1e-1 … 1: 17 / 3 updates, −0.40 / −0.37 %; 10: −0.05 %; 1e2 … 1e4: no update needed,
-+0.03 … +0.16 %.
+penetration reported). Measured (P2B-P2B): κ̂ = 1e-2 stops after 50 updates at 8.8 % h
+penetration and −0.65 %; 1e-1 … 1: 17 / 3 updates, −0.36 / −0.25 %; 10: −0.01 %; 1e2 … 1e4: no
+update needed, +0.03 … +0.16 %.
 """
 
 from fenics_garment._stack import MPI  # noqa: I001
