@@ -92,14 +92,12 @@ _EXTRA: dict[str, list[tuple[str, str, str, int]]] = {
     "quick": [("sze-3.7-semicylinder", DEFAULT_ELEMENT, "baseline", 8)],
     "default": [
         ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "baseline", 20),
-        ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "iterative", 20),
+        ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "iterative", 8),
         ("scordelis-lo", DEFAULT_ELEMENT, "iterative", 16),
         ("scordelis-lo", "P2-P2", "direct", 8),
         ("scordelis-lo", "P2-P2", "direct", 16),
         ("scordelis-lo", "P1-P1", "direct", 8),
         ("scordelis-lo", "P1-P1", "direct", 16),
-        ("scordelis-lo", "P2B-P2-full", "direct", 16),
-        ("sze-3.7-semicylinder", "P2-P2", "direct", 20),
     ],
 }
 

@@ -228,6 +228,8 @@ class NonlinearSolver:
     # -- PETSc plumbing ------------------------------------------------------------------------
     def _user_ksp_options(self, ksp, opts: dict, prefix: str) -> None:
         extra = {k: v for k, v in opts.items() if k.startswith(("ksp_", "pc_", "mat_"))}
+        if opts["pc_type"] not in ("lu", "cholesky"):  # e.g. MUMPS has no ILU
+            extra.pop("pc_factor_mat_solver_type", None)
         if not extra:
             return
         o = PETSc.Options()
@@ -404,7 +406,7 @@ class LoadStepper:
     predictor: bool | str = "tangent"
     max_growth: float = 1.5
     target_iterations: int | None = None
-    intermediate_rtol: float | None = None
+    intermediate_rtol: float | None = 1e-3
     on_step: Callable[[StepRecord], None] | None = None
     history: list[StepRecord] = field(default_factory=list)
 
