@@ -12,7 +12,8 @@ Solver variants (the load stepper and linear solver settings; see :data:`SOLVERS
 * ``direct``: the package defaults (MUMPS LDLᵀ, tangent predictor, loose intermediate steps),
 * ``baseline``: the settings before issue 3 (MUMPS LU, secant predictor, every step converged to
   the final tolerance, portable JIT flags),
-* ``iterative``: GMRES + GAMG instead of the direct solver (work–precision comparison, issue 7).
+* ``iterative``: GMRES + GAMG instead of the direct solver (work–precision comparison, issue 7),
+* ``direct-5steps``: ``direct`` with 5 initial load steps (the semi-cylinder's best setting).
 
     python -m benchmarks.shells [--quick|--full] [--repeat N] [case ...]
 """
@@ -58,6 +59,8 @@ SOLVERS: dict[str, SolverSettings] = {
             stepper={"predictor": "secant", "intermediate_rtol": None, "target_iterations": None},
         ),
         SolverSettings("iterative", petsc_options=dict(ITERATIVE_OPTIONS)),
+        # the recommended semi-cylinder setting: 5 initial load steps instead of the case's 10
+        SolverSettings("direct-5steps", stepper={"steps": 5}),
     )
 }
 
@@ -93,6 +96,9 @@ _EXTRA: dict[str, list[tuple[str, str, str, int]]] = {
     "default": [
         ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "baseline", 20),
         ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "iterative", 8),
+        ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "direct-5steps", 8),
+        ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "direct-5steps", 16),
+        ("sze-3.7-semicylinder", DEFAULT_ELEMENT, "direct-5steps", 20),
         ("scordelis-lo", DEFAULT_ELEMENT, "iterative", 16),
         ("scordelis-lo", "P2-P2", "direct", 8),
         ("scordelis-lo", "P2-P2", "direct", 16),
