@@ -133,7 +133,7 @@ def plan(mode: str, cases: list[str] | None = None) -> list[Run]:
             for s in ("baseline", "iterative")
         ]
     else:
-        runs += [Run(*r) for r in _EXTRA[mode]]
+        runs += [Run(c, n, e, s) for c, e, s, n in _EXTRA[mode]]
     if cases:
         unknown = set(cases) - set(shells.CASES)
         if unknown:
