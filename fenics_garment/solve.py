@@ -7,22 +7,32 @@
 * dead point loads added to the residual vector, scaled by the load factor λ,
 * a NaN/Inf check on every residual (SNES is told the point is outside the domain, so the line
   search or the load stepper backs off instead of propagating NaNs),
-* MUMPS LU by default, set on the KSP/PC objects directly (NonlinearProblem drops the options it
-  does not consume at construction), with the symbolic factorisation reused between iterations.
+* a direct solver by default, set on the KSP/PC objects directly (NonlinearProblem drops the
+  options it does not consume at construction): MUMPS LDLᵀ (``cholesky``, half the flops of LU)
+  when the Jacobian is symmetric — a model whose residual is the derivative of an energy, i.e.
+  without follower loads or extra residual terms — MUMPS LU otherwise. The symbolic factorisation
+  is done once and reused (the sparsity pattern never changes),
+* the residual skips the Dirichlet *lifting* (a Jacobian-kernel assembly over the cells that touch
+  constrained dofs) whenever the iterate already satisfies the boundary values, which is every
+  Newton iterate after the first.
 
-``LoadStepper`` increases λ from 0 to 1 with a secant predictor, adaptive step size and cut-back on
+``LoadStepper`` increases λ from 0 to 1 with a predictor (tangent by default: one stale-Jacobian
+Newton step at the new load, which costs a residual and a triangular solve), a step size adapted
+to the Newton iteration count, loose corrector tolerances on the intermediate steps (the path of
+an elastic problem need not be followed to round-off, only the final state), cut-back on
 divergence, and raises :class:`SolveFailed` when it runs out of retries.
 """
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from fenics_garment._stack import PETSc, dolfinx
+from fenics_garment._stack import MPI, PETSc, dolfinx
 
 DEFAULT_SNES_OPTIONS: dict[str, object] = {
     "snes_type": "newtonls",
@@ -37,9 +47,29 @@ DEFAULT_SNES_OPTIONS: dict[str, object] = {
     # a failure by itself; divergence is judged by max_it, NaN checks and the load stepper.
     "snes_divergence_tolerance": -1,
     "ksp_type": "preonly",
+    # "lu", or "cholesky" when the Jacobian is symmetric (see NonlinearSolver(symmetric=...))
     "pc_type": "lu",
     "pc_factor_mat_solver_type": "mumps",
 }
+
+JIT_OPTIONS: dict[str, object] = (
+    {}
+    if os.environ.get("FENICS_GARMENT_PORTABLE_JIT")
+    else {"cffi_extra_compile_args": ["-O2", "-g0", "-march=native"]}
+)
+"""FFCx/CFFI options of the residual and Jacobian kernels: compiled for this CPU (AVX2/FMA), the
+shell Jacobian assembles ~1.8× faster than with the portable default flags. The JIT cache
+(~/.cache/fenics) is per machine; set ``FENICS_GARMENT_PORTABLE_JIT=1`` when it is shared by
+machines with different CPUs (e.g. baked into a container image)."""
+
+ITERATIVE_OPTIONS: dict[str, object] = {
+    "ksp_type": "gmres",
+    "ksp_rtol": 1e-8,
+    "ksp_max_it": 500,
+    "ksp_gmres_restart": 100,
+    "pc_type": "gamg",
+}
+"""An iterative alternative to the direct solver (pass as ``petsc_options``): GMRES + GAMG."""
 
 
 class SolveFailed(RuntimeError):
@@ -63,16 +93,24 @@ _REASONS = {
 
 @dataclass
 class Timings:
-    """Wall-clock split, accumulated over a run."""
+    """Wall-clock split, accumulated over a run.
+
+    ``solve`` is the wall time inside SNES and includes ``residual``, ``jacobian`` and ``hooks``
+    (``solve − residual − jacobian`` is the linear solver plus SNES overhead). ``predictor`` is
+    the load stepper's predictor (residual evaluations in it are counted in ``residual`` too).
+    """
 
     jit: float = 0.0
     residual: float = 0.0
     jacobian: float = 0.0
     hooks: float = 0.0
     solve: float = 0.0
+    predictor: float = 0.0
     newton_iterations: int = 0
     linear_iterations: int = 0
     residual_evaluations: int = 0
+    jacobian_evaluations: int = 0
+    liftings: int = 0
     steps: int = 0
     cuts: int = 0
 
@@ -80,8 +118,24 @@ class Timings:
         return dict(self.__dict__)
 
 
+def is_symmetric(model) -> bool:
+    """True when the model's residual is the derivative of an energy (symmetric Jacobian).
+
+    A :class:`~fenics_garment.shell.model.ShellModel` without follower loads and without extra
+    residual terms (contact) qualifies; anything else (unknown models included) does not.
+    """
+    follower = getattr(model, "_follower", None)
+    extra = getattr(model, "_extra_residual", None)
+    return follower == [] and extra == []
+
+
 class NonlinearSolver:
-    """SNES on the residual F(q) = 0 of ``model``, with hooks, point loads and timing."""
+    """SNES on the residual F(q) = 0 of ``model``, with hooks, point loads and timing.
+
+    ``symmetric``: factorise with LDLᵀ (MUMPS ``cholesky``) instead of LU; ``None`` decides with
+    :func:`is_symmetric` (and never overrides a ``pc_type`` given in ``petsc_options``).
+    ``jit_options``: passed to DOLFINx's JIT (default :data:`JIT_OPTIONS`; ``{}``: DOLFINx's own).
+    """
 
     def __init__(
         self,
@@ -92,6 +146,8 @@ class NonlinearSolver:
         pre_residual: list[Callable[[], None]] | None = None,
         petsc_options: dict | None = None,
         prefix: str = "garment_",
+        symmetric: bool | None = None,
+        jit_options: dict | None = None,
     ):
         from fenics_garment.shell.loads import point_load_vector
 
@@ -100,29 +156,38 @@ class NonlinearSolver:
         self.hooks = list(pre_residual or [])
         self.timings = Timings()
         opts = dict(DEFAULT_SNES_OPTIONS)
+        if symmetric is None:
+            symmetric = is_symmetric(model) and not self.hooks
+        if symmetric and not (petsc_options and "pc_type" in petsc_options):
+            opts["pc_type"] = "cholesky"
         if petsc_options:
             opts.update(petsc_options)
+        self.options = opts
         F = model.residual()
         J = model.jacobian(F)
         t0 = time.perf_counter()
         self.problem = dolfinx.fem.petsc.NonlinearProblem(
             F, model.q, bcs=bcs, J=J, petsc_options_prefix=prefix,
             petsc_options={k: v for k, v in opts.items() if not k.startswith(("ksp_", "pc_"))},
+            jit_options=JIT_OPTIONS if jit_options is None else jit_options,
         )  # fmt: skip
         self.timings.jit += time.perf_counter() - t0
-        snes = self.problem.solver
-        ksp = snes.getKSP()
-        ksp.setType(opts["ksp_type"])
-        pc = ksp.getPC()
-        pc.setType(opts["pc_type"])
-        if opts["pc_type"] == "lu":
-            pc.setFactorSolverType(opts["pc_factor_mat_solver_type"])
-        self._user_ksp_options(ksp, opts, prefix)
+        self._setup_linear_solver(opts, prefix)
         self.f_point = point_load_vector(model, point_loads) if point_loads else None
         if self.f_point is not None:
             self._zero_bc_rows(self.f_point)
+        self._bc_gap = self.problem.b.duplicate()  # g − x on the constrained dofs
         self._install_callbacks()
         self.residual_floor = self._measure_floor(opts)
+
+    def _setup_linear_solver(self, opts: dict, prefix: str) -> None:
+        ksp = self.problem.solver.getKSP()
+        ksp.setType(opts["ksp_type"])
+        pc = ksp.getPC()
+        pc.setType(opts["pc_type"])
+        if opts["pc_type"] in ("lu", "cholesky"):
+            pc.setFactorSolverType(opts["pc_factor_mat_solver_type"])
+        self._user_ksp_options(ksp, opts, prefix)
 
     def _measure_floor(self, opts: dict) -> float:
         """The round-off floor of the internal forces at the reference state (λ = 0, q = 0).
@@ -163,6 +228,8 @@ class NonlinearSolver:
     # -- PETSc plumbing ------------------------------------------------------------------------
     def _user_ksp_options(self, ksp, opts: dict, prefix: str) -> None:
         extra = {k: v for k, v in opts.items() if k.startswith(("ksp_", "pc_", "mat_"))}
+        if opts["pc_type"] not in ("lu", "cholesky"):  # e.g. MUMPS has no ILU
+            extra.pop("pc_factor_mat_solver_type", None)
         if not extra:
             return
         o = PETSc.Options()
@@ -178,28 +245,50 @@ class NonlinearSolver:
             with vec.localForm() as vl:
                 vl.array[dofs[:n_owned]] = 0.0
 
+    def _lifting_needed(self, x) -> bool:
+        """Whether some constrained dof of ``x`` differs from its boundary value (all ranks)."""
+        if not self.bcs:
+            return False
+        gap = self._bc_gap
+        with gap.localForm() as gl:
+            gl.set(0.0)
+        dolfinx.fem.petsc.set_bc(gap, self.bcs, x0=x, alpha=1.0)
+        local = float(np.max(np.abs(gap.array_r), initial=0.0))
+        return gap.comm.tompi4py().allreduce(local, op=MPI.MAX) > 0.0
+
+    def _assemble_residual(self, x, b) -> None:
+        """``dolfinx.fem.petsc.assemble_residual`` without the lifting when it adds nothing."""
+        from dolfinx.fem.petsc import apply_lifting, assemble_vector, set_bc
+
+        p = self.problem
+        dolfinx.la.petsc._zero_vector(b)
+        assemble_vector(b, p.F)
+        if self._lifting_needed(x):
+            apply_lifting(b, [p.J], bcs=[self.bcs], x0=[x], alpha=-1.0)
+            self.timings.liftings += 1
+        dolfinx.la.petsc._ghost_update(b, PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+        set_bc(b, self.bcs, x0=x, alpha=-1.0)
+        dolfinx.la.petsc._ghost_update(b, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+
     def _install_callbacks(self) -> None:
-        from dolfinx.fem.petsc import assemble_jacobian, assemble_residual
+        from dolfinx.fem.petsc import assemble_jacobian
 
         snes = self.problem.solver
         p = self.problem
-        rctx = {"u": p.u, "residual": p.F, "jacobian": p.J, "bcs": self.bcs}
         jctx = {"u": p.u, "jacobian": p.J, "preconditioner": p.preconditioner, "bcs": self.bcs}
         model = self.model
         timings = self.timings
 
         def residual(snes_, x, b):
             t0 = time.perf_counter()
+            dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+            dolfinx.fem.petsc.assign(x, model.q)
             if self.hooks:
-                dolfinx.la.petsc._ghost_update(
-                    x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD
-                )
-                dolfinx.fem.petsc.assign(x, model.q)
                 th = time.perf_counter()
                 for hook in self.hooks:
                     hook()
                 timings.hooks += time.perf_counter() - th
-            assemble_residual(snes_, x, b, **rctx)
+            self._assemble_residual(x, b)
             if self.f_point is not None:
                 b.axpy(-float(model.load_factor.value), self.f_point)
             timings.residual_evaluations += 1
@@ -211,6 +300,7 @@ class NonlinearSolver:
         def jacobian(snes_, x, J, P):
             t0 = time.perf_counter()
             assemble_jacobian(snes_, x, J, P, **jctx)
+            timings.jacobian_evaluations += 1
             timings.jacobian += time.perf_counter() - t0
 
         snes.setFunction(residual, p.b)
@@ -229,6 +319,35 @@ class NonlinearSolver:
         self.timings.linear_iterations += snes.getLinearSolveIterations()
         self.timings.solve += dt
         return its, reason
+
+    def set_rtol(self, rtol: float) -> None:
+        """Change the relative (residual and step) tolerance of the following solves."""
+        self.problem.solver.setTolerances(rtol=rtol)
+
+    def stale_newton_step(self) -> bool:
+        """q ← q − J₀⁻¹ F(q) with the last factorised Jacobian J₀ (no assembly, no factorisation).
+
+        At a converged state with λ raised this is the tangent predictor. Returns False (q
+        unchanged) when there is no factorisation yet or the step is not finite.
+        """
+        p = self.problem
+        ksp = p.solver.getKSP()
+        if not ksp.getPC().getOperators()[0].assembled or self.timings.jacobian_evaluations == 0:
+            return False
+        t0 = time.perf_counter()
+        x, b = p.x, p.b
+        dolfinx.fem.petsc.assign(self.model.q, x)
+        p.solver.computeFunction(x, b)
+        dq = x.duplicate()
+        ksp.solve(b, dq)
+        ok = np.isfinite(dq.norm())
+        if ok:
+            x.axpy(-1.0, dq)
+            dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+            dolfinx.fem.petsc.assign(x, self.model.q)
+        dq.destroy()
+        self.timings.predictor += time.perf_counter() - t0
+        return bool(ok)
 
     def residual_history(self) -> np.ndarray:
         """Residual norms ‖F(q_k)‖ of the last :meth:`solve`, k = 0 … iterations."""
@@ -259,12 +378,24 @@ class StepRecord:
     cuts: int
 
 
+PREDICTORS = ("tangent", "secant", "none")
+
+
 @dataclass
 class LoadStepper:
-    """Drive λ from 0 to 1 in adaptive steps with a secant predictor.
+    """Drive λ from 0 to 1 in adaptive steps with a predictor and cut-back on failure.
 
-    A step whose Newton solve fails is restored and halved (up to ``max_cuts`` times in a row);
-    a step that converges in few iterations lets the next one grow.
+    * ``predictor``: ``"tangent"`` (default; also ``True``) takes one Newton step at the new load
+      with the last factorised Jacobian — the tangent of the load path, at the cost of a residual
+      and a triangular solve; ``"secant"`` extrapolates the last two converged states;
+      ``"none"`` (also ``False``) starts from the last converged state.
+    * step size: a step that converges in ``its`` iterations scales the next one by
+      ``clip(target_iterations / its, 0.5, max_growth)``; without ``target_iterations``, by
+      ``max_growth`` when ``its <= grow_below`` and by 1 otherwise.
+    * ``intermediate_rtol``: relative tolerance of the steps before the last one (``None``: the
+      solver's own). An elastic load path need not be followed to round-off; only the final
+      state is converged to the solver's tolerance.
+    * A step whose Newton solve fails is restored and halved (up to ``max_cuts`` times in a row).
     """
 
     solver: NonlinearSolver
@@ -272,45 +403,75 @@ class LoadStepper:
     min_step: float = 1e-4
     max_cuts: int = 6
     grow_below: int = 4
-    predictor: bool = True
+    predictor: bool | str = "tangent"
+    max_growth: float = 1.5
+    target_iterations: int | None = None
+    intermediate_rtol: float | None = 1e-3
     on_step: Callable[[StepRecord], None] | None = None
     history: list[StepRecord] = field(default_factory=list)
 
+    def _predictor_kind(self) -> str:
+        kind = {True: "tangent", False: "none"}.get(self.predictor, self.predictor)
+        if kind not in PREDICTORS:
+            raise ValueError(f"predictor must be one of {PREDICTORS}, got {self.predictor!r}")
+        return kind
+
+    def _next_step(self, step: float, its: int) -> float:
+        if self.target_iterations is None:
+            return step * (self.max_growth if its <= self.grow_below else 1.0)
+        factor = self.target_iterations / max(its, 1)
+        return step * min(max(factor, 0.5), self.max_growth)
+
+    def _predict(self, kind: str, step: float, q_prev: np.ndarray, lam_prev: float, lam: float):
+        q = self.solver.model.q
+        if kind == "secant" and self.history and lam > lam_prev:
+            q.x.array[:] = q.x.array + (step / (lam - lam_prev)) * (q.x.array - q_prev)
+        elif kind == "tangent":
+            self.solver.stale_newton_step()
+
     def run(self, target: float = 1.0) -> list[StepRecord]:
-        model = self.solver.model
+        solver = self.solver
+        model = solver.model
         q = model.q
+        kind = self._predictor_kind()
+        rtol = solver.problem.solver.getTolerances()[0]
         lam = float(model.load_factor.value) if self.history else 0.0
         dlam = (target - lam) / self.steps
         q_prev = q.x.array.copy()
         lam_prev = lam
         cuts_in_row = 0
-        while lam < target - 1e-14:
-            step = min(dlam, target - lam)
-            q_conv = q.x.array.copy()
-            if self.predictor and self.history and lam > lam_prev:
-                q.x.array[:] = q_conv + (step / (lam - lam_prev)) * (q_conv - q_prev)
-            model.load_factor.value = lam + step
-            its, reason = self.solver.solve()
-            if reason > 0:
-                q_prev, lam_prev = q_conv, lam
-                lam += step
-                rec = StepRecord(lam, its, reason, cuts_in_row)
-                self.history.append(rec)
-                self.solver.timings.steps += 1
-                if self.on_step:
-                    self.on_step(rec)
-                cuts_in_row = 0
-                if its <= self.grow_below:
-                    dlam = step * 1.5
+        try:
+            while lam < target - 1e-14:
+                step = min(dlam, target - lam)
+                last = lam + step >= target - 1e-14
+                q_conv = q.x.array.copy()
+                model.load_factor.value = lam + step
+                self._predict(kind, step, q_prev, lam_prev, lam)
+                loose = self.intermediate_rtol is not None and not last
+                solver.set_rtol(max(self.intermediate_rtol, rtol) if loose else rtol)
+                its, reason = solver.solve()
+                if reason > 0:
+                    q_prev, lam_prev = q_conv, lam
+                    lam += step
+                    rec = StepRecord(lam, its, reason, cuts_in_row)
+                    self.history.append(rec)
+                    solver.timings.steps += 1
+                    if self.on_step:
+                        self.on_step(rec)
+                    cuts_in_row = 0
+                    dlam = self._next_step(step, its)
+                    # do not leave a sliver for the last step
+                    if target - lam < 1.3 * dlam:
+                        dlam = target - lam
                 else:
-                    dlam = step
-            else:
-                q.x.array[:] = q_conv
-                q.x.scatter_forward()
-                model.load_factor.value = lam
-                cuts_in_row += 1
-                self.solver.timings.cuts += 1
-                dlam = step / 2
-                if cuts_in_row > self.max_cuts or dlam < self.min_step * target:
-                    raise SolveFailed(lam + step, its, reason)
+                    q.x.array[:] = q_conv
+                    q.x.scatter_forward()
+                    model.load_factor.value = lam
+                    cuts_in_row += 1
+                    solver.timings.cuts += 1
+                    dlam = step / 2
+                    if cuts_in_row > self.max_cuts or dlam < self.min_step * target:
+                        raise SolveFailed(lam + step, its, reason)
+        finally:
+            solver.set_rtol(rtol)
         return self.history

@@ -1,0 +1,45 @@
+"""One command for the benchmark suite: run, write JSON records, write the Markdown report.
+
+    python -m benchmarks [--quick|--full] [--repeat N] [name ...]
+
+``name`` is a suite (``shells``, ``contact``) or a shell case of
+:data:`fenics_garment.verification.shells.CASES` (then only those shell cases run). Without
+names all suites run. Each suite writes ``benchmarks/results/<suite>.json``; the report
+``benchmarks/results/REPORT.md`` (tables, work–precision PNGs) is rebuilt from all JSON files.
+The contact suite runs its ``--quick`` sizes unless ``--full`` is given (its own full size takes
+tens of minutes).
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+
+from benchmarks import contact, report, shells
+from fenics_garment._stack import MPI
+
+SUITES = ("shells", "contact")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    flags = [a for a in argv if a.startswith("--")]
+    mode, repeat, names = shells.parse(argv)
+    cases = [n for n in names if n not in SUITES]
+    suites = [n for n in names if n in SUITES] or (["shells"] if cases else list(SUITES))
+    comm = MPI.COMM_WORLD
+    say = print if comm.rank == 0 else (lambda *a, **k: None)
+    t0 = time.perf_counter()
+    if "shells" in suites:
+        rep = ["--repeat", str(repeat)] if repeat > 1 else []
+        shells.main([a for a in flags if a != "--repeat"] + rep + cases)
+    if "contact" in suites:
+        contact.main(["--quick"] if mode != "full" else [])
+    if comm.rank == 0:
+        report.write_report(say=say)
+    say(f"benchmarks ({mode}: {', '.join(suites)}) done in {time.perf_counter() - t0:.0f} s")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
