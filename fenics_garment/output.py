@@ -206,7 +206,10 @@ def pressure_png(
         items += draw_mesh(ax, vertices, triangles, colours, az, two_sided=under is not None)
         render(items, ax)
         ax.set_title(f"{title}: {label}")
-    fig.colorbar(ScalarMappable(norm, cmap), ax=axes, shrink=0.7, label="contact pressure [kPa]")
+    clipped = float(p_kpa.max()) > top * (1 + 1e-9)
+    label = "contact pressure [kPa]" + (f" (max {p_kpa.max():.2f})" if clipped else "")
+    fig.colorbar(ScalarMappable(norm, cmap), ax=axes, shrink=0.7, label=label,
+                 extend="max" if clipped else "neither")  # fmt: skip
     return atomic_write(Path(path), lambda p: fig.savefig(p, dpi=110, format="png"))
 
 
