@@ -53,9 +53,9 @@ def _shared_tmp(comm) -> Path:
 
 @pytest.fixture(scope="module")
 def tube_run():
-    # the whole shrink in one step with at most 6 Newton iterations: the step must be cut
+    # the whole shrink in one step with at most 4 Newton iterations (it needs 5): a cut is forced
     comm = MPI.COMM_WORLD
-    return run(_scene(snes_max_it=6), _shared_tmp(comm), quiet=True, first_step=1.0)
+    return run(_scene(snes_max_it=4), _shared_tmp(comm), quiet=True, first_step=1.0)
 
 
 def test_dressing_cuts_the_step_and_completes(tube_run):
@@ -83,7 +83,7 @@ def test_outputs_read_back(tube_run):
     rows = list(csv.DictReader((folder / "pressure_regions.csv").open()))
     assert float(rows[0]["mean_kPa"]) == pytest.approx(tube_run.regions[0]["mean_kPa"], rel=1e-5)
     assert config.load(folder / "scene_used.toml") == replace(
-        config.load(SCENE), solver=config.SolverConfig(petsc={"snes_max_it": 6}),
+        config.load(SCENE), solver=config.SolverConfig(petsc={"snes_max_it": 4}),
         source=str(folder / "scene_used.toml"),
     )  # fmt: skip
     assert (folder / "dressing.bp").is_dir()
@@ -93,10 +93,9 @@ def test_outputs_read_back(tube_run):
     meshio = pytest.importorskip("meshio")
     body = meshio.read(folder / "body_pressure.vtu")
     assert body.point_data["contact_pressure"].max() > 0
-    pytest.importorskip("h5py")
     with meshio.xdmf.TimeSeriesReader(str(folder / "final_state.xdmf")) as reader:
-        points, cells = reader.read_points_cells()
-        t, point_data, _ = reader.read_data(0)
+        points, _ = reader.read_points_cells()
+        _, point_data, _ = reader.read_data(0)
     p = point_data["contact_pressure"]
     assert len(p) == len(points) and p.max() == pytest.approx(
         summary["max_pressure_kPa"] * 1e3, rel=0.2

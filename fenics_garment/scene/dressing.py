@@ -11,8 +11,9 @@ state left in the model and the report of the steps so far.
 The pseudo-time regularisation (:class:`~fenics_garment.scene.build.Regularisation`) is on at c₀
 during the steps (fading it with the shrink made Newton fail near s = 0 on the gilet), then
 released at s = 0 in three solves, c₀/10, c₀/100 and 0 (measured on the cotton gilet: the
-change of the last stage from c₀/10 was 2.5 %, too much to call negligible); the answer is the c = 0 state and the pressure
-change of the last release solve is reported as the regularisation's effect.
+change of the last stage from c₀/10 was 2.5 %, too much to call negligible); the answer is the
+c = 0 state and the pressure change of the last release solve is reported as the
+regularisation's effect.
 """
 
 from __future__ import annotations

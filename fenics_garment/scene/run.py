@@ -5,8 +5,8 @@ One output folder per run, ``<output.folder>/<name>/``:
 * ``scene_used.toml`` — the scene with every default filled in;
 * ``dressing.bp`` — VTX (ParaView) time series, one frame per converged dressing step:
   displacement and contact pressure on the garment (P2 fields);
-* ``final_state.xdmf/.h5`` — final displacement, contact pressure [Pa] and largest principal
-  membrane strain (P1, one time step: ``meshio.xdmf.TimeSeriesReader`` reads it);
+* ``final_state.xdmf`` — final displacement, contact pressure [Pa] and largest principal
+  membrane strain at the garment's nodes (one time step: ``meshio.xdmf.TimeSeriesReader``);
 * ``body_pressure.vtu`` — the body surface with the pressure at its vertices [Pa] and regions;
   per-region statistics use the garment-side pressure at the contact points (``output``);
 * ``summary.json`` and ``pressure_regions.csv`` — per-region pressure (kPa, mmHg, comfort band),
@@ -97,24 +97,21 @@ class _Frames:
         comm.Barrier()
 
 
-def _write_xdmf(folder: Path, built, strain: dolfinx.fem.Function) -> None:
-    mesh = built.model.geometry.mesh
-    V1v = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
-    u1 = dolfinx.fem.Function(V1v, name="displacement")
-    u1.interpolate(built.model.q.sub(0).collapse())
-    p1 = built.contact.pressure()
-    tmp = folder / ".final_state.part.xdmf"
-    with dolfinx.io.XDMFFile(mesh.comm, tmp, "w") as xf:
-        xf.write_mesh(mesh)
-        for f in (u1, p1, strain):
-            xf.write_function(f, 0.0)
-    mesh.comm.Barrier()
-    if mesh.comm.rank == 0:  # the .xdmf names its .h5: rename both, then fix the reference
-        (folder / ".final_state.part.h5").replace(folder / "final_state.h5")
-        text = tmp.read_text().replace(".final_state.part.h5", "final_state.h5")
-        output.write_text(folder / "final_state.xdmf", text)
-        tmp.unlink()
-    mesh.comm.Barrier()
+def _write_xdmf(folder: Path, garment, fields: dict[str, np.ndarray]) -> None:
+    """The final state on the garment's reference mesh, one time step (rank 0).
+
+    Written with meshio as XDMF with inline (XML) data: one grid holding every field, which
+    ``meshio.xdmf.TimeSeriesReader`` reads without h5py (DOLFINx's XDMFFile puts each function
+    in its own temporal collection, of which meshio reads only one).
+    """
+    import meshio
+
+    def write(tmp: Path) -> None:
+        with meshio.xdmf.TimeSeriesWriter(tmp, data_format="XML") as w:
+            w.write_points_cells(garment.points, [("triangle", garment.triangles())])
+            w.write_data(0.0, point_data=fields)
+
+    output.atomic_write(folder / "final_state.xdmf", write)
 
 
 def _write_body_vtu(folder: Path, body, point_data: dict[str, np.ndarray]) -> None:
@@ -229,12 +226,11 @@ def run(
     t0 = time.perf_counter()
     frames.close(comm)
     strain = _membrane_strain(built.model)
-    if scene.output.xdmf:
-        _write_xdmf(folder, built, strain)
     st = built.contact.state
     p_lumped = cpressure.body_pressure(st, built.contact.traction, built.search_body)
     regions = output.region_table(built.body.regions, *contact_points_by_region(built))
     x_g, p_g = garment_arrays(built)  # collective
+    eps_g = output.garment_node_values(built.garment, strain)[:, 0]
     reach = 0.75 * scene.garment.mesh_size
     p_body = output.nearest_node_pressure(built.body.vertices, x_g, p_g, reach)
     measures = _contact_measures(built)
@@ -261,6 +257,10 @@ def run(
         "regions": regions,
     }
     if comm.rank == 0:
+        if scene.output.xdmf:
+            _write_xdmf(folder, built.garment, {"displacement": x_g - built.garment.points,
+                                                "contact_pressure": p_g,
+                                                "membrane_strain_max": eps_g})  # fmt: skip
         output.write_summary(folder, summary, regions)
         _write_body_vtu(folder, built.body, {"contact_pressure": p_body,
                                              "contact_pressure_lumped": p_lumped})  # fmt: skip
