@@ -1,4 +1,4 @@
-"""The ``fenics-garment`` command line: ``info``, ``demo`` (and, later, ``run``).
+"""The ``fenics-garment`` command line: ``info``, ``demo`` and ``run SCENE.toml``.
 
 ``main(argv) -> int`` is the whole program so that tests call it directly. Messages are printed
 on rank 0 only; every rank runs the same commands so the program works under ``mpiexec -n N``.
@@ -76,6 +76,25 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return demos.REGISTRY[name].run(Path(args.output), quiet=args.quiet)
 
 
+def _cmd_run(args: argparse.Namespace) -> int:
+    from fenics_garment._stack import MPI
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    try:
+        scene = config.load(args.scene)
+    except config.SceneError as err:
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"error: {err}", file=sys.stderr)
+        return 2
+    result = run(scene, args.output, quiet=args.quiet)
+    if not result.completed:
+        if MPI.COMM_WORLD.rank == 0:
+            print(f"error: {result.message}", file=sys.stderr)
+        return 3
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fenics-garment",
@@ -94,6 +113,14 @@ def build_parser() -> argparse.ArgumentParser:
     p_demo.add_argument("-o", "--output", default="output", help="output folder (default: output/)")
     p_demo.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     p_demo.set_defaults(func=_cmd_demo)
+
+    p_run = sub.add_parser("run", help="dress a garment described by a scene file (TOML)")
+    p_run.add_argument("scene", help="scene file, e.g. demos/cotton_gilet.toml")
+    p_run.add_argument("-o", "--output", default=None,
+                       help="output root (default: the scene's output.folder); "
+                       "the run writes <root>/<scene name>/")  # fmt: skip
+    p_run.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    p_run.set_defaults(func=_cmd_run)
     return parser
 
 

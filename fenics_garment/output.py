@@ -1,0 +1,245 @@
+"""Outputs of a run: pressure statistics per body region, comfort bands, files and pictures.
+
+Every file is written to a temporary name and renamed, so a reader (or a crashed run) never sees
+half a file. Only rank 0 writes the small files; the DOLFINx writers are collective.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import numpy.typing as npt
+
+from fenics_garment import units
+
+Array = npt.NDArray[np.float64]
+
+#: Comfort bands of garment pressure [kPa], upper bounds: Anthropometry, Apparel Sizing and
+#: Design, 2nd ed. (Gupta & Zakaria eds., Woodhead/Elsevier 2020), ch. 13, Table 13.5.
+COMFORT_BANDS: tuple[tuple[float, str], ...] = (
+    (0.4, "negligible"),
+    (1.3, "comfortable"),
+    (2.0, "critical for casual wear"),
+    (3.3, "medical/shapewear"),
+    (float("inf"), "critical"),
+)
+
+
+def comfort_band(p_kpa: float) -> str:
+    """The comfort band of a pressure in kPa (:data:`COMFORT_BANDS`)."""
+    for upper, name in COMFORT_BANDS:
+        if p_kpa < upper:
+            return name
+    return COMFORT_BANDS[-1][1]
+
+
+# ------------------------------------------------------------------------------------------------
+# Atomic files
+# ------------------------------------------------------------------------------------------------
+
+
+def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
+    """Call ``write(tmp)`` for a temporary name next to ``path``, then rename it to ``path``."""
+    path = Path(path)
+    tmp = path.with_name(f".{path.stem}.part{os.getpid()}{path.suffix}")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            tmp.unlink()
+    return path
+
+
+def write_text(path: Path, text: str) -> Path:
+    return atomic_write(path, lambda p: p.write_text(text))
+
+
+def atomic_dir(path: Path, write: Callable[[Path], None]) -> Path:
+    """Like :func:`atomic_write` for writers that make a directory (ADIOS2 ``.bp``)."""
+    import shutil
+
+    path = Path(path)
+    tmp = path.with_name(f".{path.name}.part")
+    write(tmp)
+    if path.exists():
+        shutil.rmtree(path)
+    os.replace(tmp, path)
+    return path
+
+
+# ------------------------------------------------------------------------------------------------
+# Pressure on the body, per region
+# ------------------------------------------------------------------------------------------------
+
+
+def weighted_percentile(values: Array, weights: Array, q: float) -> float:
+    """The q-th percentile (0–100) of ``values`` with ``weights`` (area): the smallest value
+    below which at least q % of the weight lies."""
+    if len(values) == 0:
+        return 0.0
+    order = np.argsort(values)
+    cum = np.cumsum(weights[order])
+    k = np.searchsorted(cum, q / 100.0 * cum[-1])
+    return float(values[order][min(k, len(values) - 1)])
+
+
+def region_table(
+    regions: dict[str, int], region: npt.NDArray[np.int32], p: Array, area: Array
+) -> list[dict]:
+    """Per body region: contact area and mean / max / 95th-percentile pressure (kPa and mmHg).
+
+    Args:
+        regions: region name -> number (``BodySurface.regions``).
+        region: the body region under each garment contact point (its closest body triangle's).
+        p: pressure at each contact point [Pa] (contact force over deformed area).
+        area: deformed area carried by each contact point [m²].
+
+    Only points in contact (p > 0) count. Statistics are area weighted, so a region half covered
+    reports the pressure where it is pressed, and its contact area separately. The garment-side
+    pressure is used rather than the force lumped onto the body's vertices, which aliases when the
+    body mesh is finer than the garment's. The comfort band is judged on the 95th percentile,
+    which single-node spikes at hems and armholes do not move.
+    """
+    rows = []
+    for name, tag in sorted(regions.items(), key=lambda kv: kv[1]):
+        sel = (region == tag) & (p > 0)
+        a, pr = area[sel], p[sel]
+        mean = float(np.sum(pr * a) / np.sum(a)) if len(a) else 0.0
+        stats = (("mean", mean), ("p95", weighted_percentile(pr, a, 95.0)),
+                 ("max", float(pr.max()) if len(pr) else 0.0))  # fmt: skip
+        row: dict = {"region": name, "contact_area_m2": float(a.sum())}
+        for key, val in stats:
+            row[f"{key}_kPa"] = units.pa_to_kpa(val)
+            row[f"{key}_mmHg"] = units.pa_to_mmhg(val)
+        row["comfort"] = comfort_band(row["p95_kPa"])
+        rows.append(row)
+    return rows
+
+
+def nearest_node_pressure(
+    body_vertices: Array, garment_points: Array, p_garment: Array, reach: float
+) -> Array:
+    """Pressure on the body for pictures: each body vertex takes the pressure of the nearest
+    deformed garment node within ``reach`` [m] (0 elsewhere): smooth whatever the two meshes'
+    sizes, unlike the vertex-lumped force."""
+    from scipy.spatial import cKDTree
+
+    d, i = cKDTree(garment_points).query(body_vertices, distance_upper_bound=reach)
+    out = np.zeros(len(body_vertices))
+    hit = np.isfinite(d)
+    out[hit] = p_garment[i[hit]]
+    return out
+
+
+def csv_text(rows: list[dict]) -> str:
+    buf = io.StringIO()
+    if rows:
+        w = csv.DictWriter(buf, fieldnames=list(rows[0]), lineterminator="\n")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in r.items()})
+    return buf.getvalue()
+
+
+def write_summary(folder: Path, summary: dict, rows: list[dict]) -> tuple[Path, Path]:
+    """``summary.json`` (everything) and ``pressure_regions.csv`` (the region table)."""
+    folder = Path(folder)
+    j = write_text(folder / "summary.json", json.dumps(summary, indent=2, default=_jsonable))
+    c = write_text(folder / "pressure_regions.csv", csv_text(rows))
+    return j, c
+
+
+def _jsonable(v):
+    if isinstance(v, np.generic):
+        return v.item()
+    if isinstance(v, np.ndarray):
+        return v.tolist()
+    return str(v)
+
+
+# ------------------------------------------------------------------------------------------------
+# Pictures
+# ------------------------------------------------------------------------------------------------
+
+
+def pressure_png(
+    path: Path,
+    vertices: Array,
+    triangles: npt.NDArray[np.int64],
+    p_vertex: Array,
+    title: str,
+    *,
+    under: tuple[Array, npt.NDArray[np.int64]] | None = None,
+    vmax_kpa: float | None = None,
+) -> Path:
+    """Front and back views of a surface coloured by pressure, colour bar in kPa.
+
+    ``under`` (vertices, triangles) is drawn in grey first (the body under a garment).
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.colors import Normalize
+
+    from fenics_garment.geometry.pictures import draw_mesh, render
+
+    p_kpa = units.pa_to_kpa(np.asarray(p_vertex, dtype=float))
+    top = vmax_kpa or max(float(p_kpa.max()), 1e-6)
+    norm = Normalize(0.0, top)
+    cmap = plt.get_cmap("viridis")
+    colours = cmap(norm(p_kpa[triangles].mean(axis=1)))
+    fig, axes = plt.subplots(1, 2, figsize=(9, 6))
+    for ax, az, label in zip(axes, (0.0, 180.0), ("front", "back"), strict=True):
+        items = []
+        if under is not None:
+            grey = np.tile([0.8, 0.8, 0.82, 1.0], (len(under[1]), 1))
+            items += draw_mesh(ax, under[0], under[1], grey, az, two_sided=False)
+        items += draw_mesh(ax, vertices, triangles, colours, az, two_sided=under is not None)
+        render(items, ax)
+        ax.set_title(f"{title}: {label}")
+    clipped = float(p_kpa.max()) > top * (1 + 1e-9)
+    label = "contact pressure [kPa]" + (f" (max {p_kpa.max():.2f})" if clipped else "")
+    fig.colorbar(ScalarMappable(norm, cmap), ax=axes, shrink=0.7, label=label,
+                 extend="max" if clipped else "neither")  # fmt: skip
+    return atomic_write(Path(path), lambda p: fig.savefig(p, dpi=110, format="png"))
+
+
+# ------------------------------------------------------------------------------------------------
+# DOLFINx fields as arrays on the garment's gmsh nodes (for pictures and tables, on every rank)
+# ------------------------------------------------------------------------------------------------
+
+
+def garment_node_values(garment, f) -> Array:
+    """Values of a P1 Function ``f`` (scalar or vector) at the garment's gmsh nodes, (n, bs).
+
+    For P1 on a linear mesh the cell's dofs and geometry nodes follow the same reference-vertex
+    order, so each geometry node takes the value of the dof in the same cell slot; the owners'
+    values are gathered by original (gmsh) node number and shared with every rank.
+    """
+    from fenics_garment._stack import MPI
+
+    mesh = f.function_space.mesh
+    bs = f.function_space.dofmap.index_map_bs
+    gdm = mesh.geometry.dofmaps[0]
+    vdm = f.function_space.dofmap.list
+    node_dof = np.empty(len(mesh.geometry.x), dtype=np.int64)
+    node_dof[gdm.ravel()] = vdm.ravel()
+    vals = f.x.array.reshape(-1, bs)[node_dof]
+    gidx = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    out = np.zeros((len(garment.points), bs))
+    seen = np.zeros(len(garment.points))
+    out[gidx] = vals
+    seen[gidx] = 1.0
+    comm = mesh.comm
+    out = comm.allreduce(out * seen[:, None], op=MPI.SUM)
+    seen = comm.allreduce(seen, op=MPI.SUM)
+    return out / np.maximum(seen, 1.0)[:, None]

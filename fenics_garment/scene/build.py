@@ -1,0 +1,173 @@
+"""From a :class:`~fenics_garment.scene.config.Scene` to body, garment, shell model and contact.
+
+Pipeline (seed paper §4.1, steps 1–3): the body surface (mannequin from measurements, a scan, or
+a cylinder) → the garment cut from it with its pattern ease → the Naghdi shell of the fabric on
+the garment mesh → contact (normal penalty or augmented Lagrangian, Coulomb friction) with the
+body, gravity, and a pseudo-time regularisation that the dressing drives to zero.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from fenics_garment._stack import MPI, dolfinx, ufl
+from fenics_garment.contact import search, terms
+from fenics_garment.contact import shell as shell_contact
+from fenics_garment.geometry import garments as gm
+from fenics_garment.geometry.body import BodySurface
+from fenics_garment.materials import Fabric, fabric
+from fenics_garment.scene.config import Scene
+from fenics_garment.shell.kinematics import ShellGeometry
+from fenics_garment.shell.model import ShellModel
+
+
+def contact_body(body: BodySurface) -> search.BodySurface:
+    """The geometry layer's body (arrays + regions) as the contact search's body (AABB tree)."""
+    return search.BodySurface(body.vertices, body.triangles)
+
+
+def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
+    """The body of the scene, built on rank 0 and broadcast (gmsh is deterministic but serial)."""
+    b = scene.body
+    body = None
+    if comm.rank == 0:
+        if b.kind == "cylinder":
+            body = gm.cylinder_body(b.radius, b.length, h=b.mesh_size)
+        elif b.kind == "scan":
+            from fenics_garment.geometry.scan import load_scan
+
+            path = Path(b.file)
+            if not path.is_absolute() and scene.source:
+                path = Path(scene.source).parent / path
+            body, _ = load_scan(path, units=b.units or None, remesh=b.mesh_size)
+        else:
+            from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
+            from fenics_garment.geometry.measurements import measurements
+
+            m = measurements(b.size, **b.measurements)
+            sizes = MeshSizes(coarse=b.mesh_size, fine=b.mesh_size)
+            z = tuple(b.z_range) if b.z_range else None
+            body = make_mannequin(m, sizes, z_range=z, legs=b.legs)
+    return comm.bcast(body, root=0)
+
+
+def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentSurface:
+    """The garment pattern (stress-free reference) cut from ``body`` with the scene's ease."""
+    g = scene.garment
+    kw: dict = {"h": g.mesh_size, "comm": comm}
+    if g.ease != {}:
+        kw["ease"] = g.ease
+    if g.kind == "gilet":
+        return gm.make_gilet(body, **kw)
+    if g.kind == "dress":
+        return gm.make_dress(body, **kw)
+    if g.kind == "stocking":
+        return gm.make_stocking(body, side=g.side, **kw)
+    return gm.make_tube(body, **kw)
+
+
+def make_fabric(scene: Scene) -> Fabric:
+    """The built-in fabric with the scene's overrides (Fabric re-checks its ranges)."""
+    base = fabric(scene.garment.fabric)
+    overrides = scene.garment.fabric_overrides
+    return replace(base, **overrides) if overrides else base
+
+
+@dataclass
+class Regularisation:
+    """Pseudo-time term Π_reg = ½ c |u − u_prev|² dA (u_prev: the last converged step).
+
+    A garment held only by contact and friction has zero-stiffness modes while it is out of
+    contact (the body is shrunk at the start of dressing). This spring to the previous step
+    removes them; it does no work at a converged equilibrium that does not move, and the
+    dressing drives c to 0 on the final solve, so the answer is not biased (STACK.md: a spring
+    to the previous step, unlike one to zero, leaves the exact solution unchanged).
+    """
+
+    c: dolfinx.fem.Constant  # [Pa/m]
+    c0: float
+    q_prev: dolfinx.fem.Function
+
+    def accept_step(self, q: dolfinx.fem.Function) -> None:
+        self.q_prev.x.array[:] = q.x.array
+
+
+def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
+    """Add the residual c (u − u_prev)·δu of :class:`Regularisation` to ``model``."""
+    q_prev = dolfinx.fem.Function(model.Q, name="q_prev")
+    c = dolfinx.fem.Constant(model.geometry.mesh, dolfinx.default_scalar_type(c0))
+    v_u = ufl.split(ufl.TestFunction(model.Q))[0]
+    u_prev = ufl.split(q_prev)[0]
+    model.add_residual(c * ufl.dot(model.u - u_prev, v_u) * model.dx_full)
+    return Regularisation(c, c0, q_prev)
+
+
+def add_friction(contact: shell_contact.ShellContact, mu: float) -> dolfinx.fem.Constant:
+    """Coulomb friction (stick penalty = the normal penalty) on an attached contact."""
+    model, state = contact.model, contact.state
+    mu_c = dolfinx.fem.Constant(model.geometry.mesh, dolfinx.default_scalar_type(mu))
+    t_t = terms.friction_traction(state, mu_c, contact.kappa, contact.traction)
+    v_u = ufl.split(ufl.TestFunction(model.Q))[0]
+    model.add_residual(-ufl.dot(t_t, v_u) * state.dx)
+    return mu_c
+
+
+@dataclass
+class Built:
+    """Everything a dressing run needs."""
+
+    scene: Scene
+    body: BodySurface
+    garment: gm.GarmentSurface
+    model: ShellModel
+    contact: shell_contact.ShellContact
+    search_body: search.BodySurface
+    regularisation: Regularisation
+    bcs: list
+    mu: dolfinx.fem.Constant | None
+    gravity: dolfinx.fem.Constant | None
+
+    @property
+    def dofs(self) -> int:
+        im = self.model.Q.dofmap.index_map
+        return im.size_global * self.model.Q.dofmap.index_map_bs
+
+
+def outward_from_axis(body: BodySurface):
+    """Outward direction for the garment cells: horizontally away from the body's axis."""
+    c = body.vertices.mean(axis=0)
+
+    def outward(x: np.ndarray) -> np.ndarray:
+        d = np.asarray(x, dtype=np.float64) - c
+        d[:, 2] = 0.0
+        return d
+
+    return outward
+
+
+def build(scene: Scene, comm: MPI.Comm) -> Built:
+    """Body, garment, shell model, contact, friction, gravity and regularisation of ``scene``."""
+    body = make_body(scene, comm)
+    garment = make_garment(scene, body, comm)
+    mesh = garment.mesh
+    W = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
+    geo = ShellGeometry.from_mesh(
+        mesh, warp=garment.warp_function(W), outward=outward_from_axis(body)
+    )
+    model = ShellModel(geo, make_fabric(scene), element=scene.garment.element)
+    p = scene.physics
+    gravity = model.add_gravity() if p.gravity else None
+    sbody = contact_body(body)
+    contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model))
+    mu = add_friction(contact, p.friction) if p.friction > 0 else None
+    c0 = scene.dressing.regularisation / p.kappa_hat * float(contact.kappa.value)
+    reg = add_regularisation(model, c0)
+    return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
+
+
+def _rule(model: ShellModel) -> str:
+    """Contact points: nodal for P1 (measured best, contact.state), lumped P2⊕bubble otherwise."""
+    return "vertex" if model.variant.u_degree == 1 else "lumped"

@@ -1,0 +1,356 @@
+"""Scene files: a TOML description of body, garment, physics, dressing, solver and outputs.
+
+A scene is loaded into frozen dataclasses and validated on load, so that a typo or a negative
+thickness fails at once, naming the file and the key, instead of deep inside a Newton solve::
+
+    name = "cotton-gilet"
+    [body]
+    kind = "mannequin"          # mannequin | scan | cylinder
+    size = "88"                 # EN 13402-3 size code; [body.measurements] overrides girths
+    [garment]
+    kind = "gilet"              # gilet | dress | tube | stocking
+    fabric = "cotton"           # built-in fabric; [garment.fabric_overrides] replaces fields
+    ease = { waist = -0.04 }    # fraction of the body girth per level (or one number)
+    [physics]
+    friction = 0.4
+    [dressing]
+    steps = 4
+
+Every key has a default (the dataclass field); :func:`dump` writes the scene actually used.
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import tomllib
+import types
+import typing
+from dataclasses import asdict, dataclass, field, fields, is_dataclass
+from pathlib import Path
+from typing import Any
+
+from fenics_garment.contact.terms import MU_SKIN_COTTON
+
+
+class SceneError(ValueError):
+    """A scene file is invalid: names the file and the dotted key."""
+
+    def __init__(self, source: str, key: str, message: str):
+        self.source, self.key = source, key
+        where = f"{source}: " if source else ""
+        super().__init__(f"{where}[{key}] {message}" if key else f"{where}{message}")
+
+
+# ------------------------------------------------------------------------------------------------
+# Sections. Field types drive the type check; ``_check_*`` functions the range checks.
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class BodyConfig:
+    """The body: a parametric mannequin, a scan file, or an analytic cylinder (test rig, arm)."""
+
+    kind: str = "mannequin"
+    size: str = "88"  # mannequin size code (bust girth in cm)
+    measurements: dict[str, float] = field(default_factory=dict)  # overrides [m]
+    legs: bool = False
+    z_range: list[float] = field(default_factory=lambda: [0.75, 1.55])  # crop [m]; [] = none
+    mesh_size: float = 0.02  # body triangle size [m]
+    file: str = ""  # scan file (kind = "scan"), relative to the scene file
+    units: str = ""  # scan units "m" | "cm" | "mm" ("" = detect)
+    radius: float = 0.1  # cylinder radius [m]
+    length: float = 0.2  # cylinder length [m]
+
+
+@dataclass(frozen=True)
+class GarmentConfig:
+    """The garment pattern: kind, ease per level (negative = tighter than the body), fabric."""
+
+    kind: str = "gilet"
+    ease: float | dict[str, float] = field(default_factory=dict)  # {} = the kind's default
+    fabric: str = "cotton"
+    fabric_overrides: dict[str, float] = field(default_factory=dict)  # e.g. thickness [m]
+    mesh_size: float = 0.03  # target element size [m]
+    element: str = "P2B-P2"
+    side: str = "left"  # stocking leg
+
+
+@dataclass(frozen=True)
+class PhysicsConfig:
+    """Loads and contact.
+
+    ``friction`` default 0.4: skin against cotton, within the 0.3–0.6 of dry to normal skin in
+    Derler & Gerhardt, "Tribology of skin: review and analysis of experimental results for the
+    friction coefficient of human skin", Tribol. Lett. 45 (2012) 1–27 (see also
+    :data:`fenics_garment.contact.terms.MU_SKIN_COTTON`).
+    """
+
+    gravity: bool = True
+    friction: float = MU_SKIN_COTTON
+    contact: str = "penalty"  # penalty | augmented-lagrangian
+    tolerance: float = 1e-4  # augmented Lagrangian: max penetration [m]
+    kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
+    max_updates: int = 8  # augmented-Lagrangian multiplier updates
+
+
+@dataclass(frozen=True)
+class DressingConfig:
+    """Dressing by shrinking the body and growing it back in adaptive steps.
+
+    ``regularisation``: c₀ of the pseudo-time term ½ c (u − u_prev)² relative to A/ℓ² (membrane
+    stiffness over the element size squared); it vanishes with the shrink, c = c₀ s/s₀, and the
+    final state is re-solved with c = 0.
+    """
+
+    steps: int = 4
+    margin: float = 0.002  # shrink beyond the deepest initial penetration [m]
+    max_cuts: int = 4  # halvings of a failed step before giving up
+    regularisation: float = 1e-2
+    grow: float = 1.5  # step growth after an easy step
+
+
+@dataclass(frozen=True)
+class SolverConfig:
+    """PETSc options passed through to SNES/KSP (e.g. snes_max_it = 30)."""
+
+    petsc: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class OutputConfig:
+    folder: str = "output"  # relative to the current directory; the run makes <folder>/<name>
+    vtx: bool = True
+    xdmf: bool = True
+    pictures: bool = True
+    every_step: bool = True  # VTX frame per dressing step (else only the final state)
+
+
+@dataclass(frozen=True)
+class Scene:
+    name: str = "scene"
+    body: BodyConfig = field(default_factory=BodyConfig)
+    garment: GarmentConfig = field(default_factory=GarmentConfig)
+    physics: PhysicsConfig = field(default_factory=PhysicsConfig)
+    dressing: DressingConfig = field(default_factory=DressingConfig)
+    solver: SolverConfig = field(default_factory=SolverConfig)
+    output: OutputConfig = field(default_factory=OutputConfig)
+    source: str = field(default="", compare=False)  # the file it came from (not a TOML key)
+
+
+BODY_KINDS = ("mannequin", "scan", "cylinder")
+GARMENT_KINDS = ("gilet", "dress", "tube", "stocking")
+CONTACT_METHODS = ("penalty", "augmented-lagrangian")
+ELEMENTS = ("P2B-P2", "P2-P2", "P1-P1")
+
+
+# ------------------------------------------------------------------------------------------------
+# Generic conversion: TOML table -> dataclass, with the type of every field checked.
+# ------------------------------------------------------------------------------------------------
+
+
+def _type_name(tp: Any) -> str:
+    if isinstance(tp, type):
+        return {"float": "number", "int": "integer", "str": "string", "bool": "boolean"}.get(
+            tp.__name__, tp.__name__
+        )
+    origin = typing.get_origin(tp)
+    if origin in (typing.Union, types.UnionType):
+        return " or ".join(_type_name(a) for a in typing.get_args(tp))
+    if origin is dict:
+        return f"table of {_type_name(typing.get_args(tp)[1])}s"
+    if origin is list:
+        return f"array of {_type_name(typing.get_args(tp)[0])}s"
+    return str(tp)
+
+
+def _convert(value: Any, tp: Any, key: str, src: str) -> Any:
+    """``value`` as type ``tp`` (int accepted for float), or SceneError."""
+    origin = typing.get_origin(tp)
+    if tp is Any:
+        return value
+    if origin in (typing.Union, types.UnionType):
+        for arg in typing.get_args(tp):
+            try:
+                return _convert(value, arg, key, src)
+            except SceneError:
+                continue
+    elif origin is dict:
+        if isinstance(value, dict):
+            vt = typing.get_args(tp)[1]
+            return {k: _convert(v, vt, f"{key}.{k}", src) for k, v in value.items()}
+    elif origin is list:
+        if isinstance(value, list):
+            et = typing.get_args(tp)[0]
+            return [_convert(v, et, f"{key}[{i}]", src) for i, v in enumerate(value)]
+    elif tp is float:
+        if isinstance(value, int | float) and not isinstance(value, bool):
+            if not math.isfinite(value):
+                raise SceneError(src, key, f"must be a finite number, got {value!r}")
+            return float(value)
+    elif tp is int:
+        if isinstance(value, int) and not isinstance(value, bool):
+            return value
+    elif isinstance(tp, type) and isinstance(value, tp):
+        return value
+    name = _type_name(tp)
+    article = "an" if name[0] in "aeiou" else "a"
+    raise SceneError(src, key, f"must be {article} {name}, got {type(value).__name__} {value!r}")
+
+
+def _unknown(key: str, known: list[str], where: str, src: str) -> SceneError:
+    close = difflib.get_close_matches(key, known, n=1, cutoff=0.6)
+    hint = f"; did you mean '{close[0]}'?" if close else f"; known keys: {', '.join(known)}"
+    return SceneError(src, f"{where}.{key}" if where else key, f"unknown key{hint}")
+
+
+def _from_table(cls: type, table: dict, where: str, src: str) -> Any:
+    hints = typing.get_type_hints(cls)
+    known = [f.name for f in fields(cls) if f.name != "source"]
+    kwargs = {}
+    for key, value in table.items():
+        if key not in known:
+            raise _unknown(key, known, where, src)
+        tp = hints[key]
+        dotted = f"{where}.{key}" if where else key
+        if is_dataclass(tp):
+            if not isinstance(value, dict):
+                raise SceneError(src, dotted, f"must be a table, got {type(value).__name__}")
+            kwargs[key] = _from_table(tp, value, key, src)
+        else:
+            kwargs[key] = _convert(value, tp, dotted, src)
+    return cls(**kwargs)
+
+
+# ------------------------------------------------------------------------------------------------
+# Range checks
+# ------------------------------------------------------------------------------------------------
+
+
+def _require(ok: bool, src: str, key: str, message: str) -> None:
+    if not ok:
+        raise SceneError(src, key, message)
+
+
+def _one_of(value: str, allowed: tuple[str, ...], src: str, key: str) -> None:
+    if value not in allowed:
+        close = difflib.get_close_matches(value, allowed, n=1)
+        hint = f" (did you mean '{close[0]}'?)" if close else ""
+        raise SceneError(src, key, f"must be one of {', '.join(allowed)}; got {value!r}{hint}")
+
+
+def _check(s: Scene) -> None:
+    from fenics_garment.geometry.measurements import _SIZE_STEPS, Measurements
+    from fenics_garment.materials import FABRICS
+
+    src = s.source
+    b, g, p, d = s.body, s.garment, s.physics, s.dressing
+    _one_of(b.kind, BODY_KINDS, src, "body.kind")
+    if b.kind == "mannequin":
+        _one_of(b.size, tuple(_SIZE_STEPS), src, "body.size")
+        known = [f.name for f in fields(Measurements)]
+        for k, v in b.measurements.items():
+            if k not in known:
+                raise _unknown(k, known, "body.measurements", src)
+            _require(v > 0, src, f"body.measurements.{k}", f"must be positive, got {v}")
+    if b.kind == "scan":
+        _require(bool(b.file), src, "body.file", "a scan body needs a file")
+        _require(b.units in ("", "m", "cm", "mm"), src, "body.units", "must be m, cm or mm")
+    if b.z_range:
+        _require(len(b.z_range) == 2 and b.z_range[0] < b.z_range[1], src, "body.z_range",
+                 f"must be [z_min, z_max] with z_min < z_max, got {b.z_range}")  # fmt: skip
+    for key in ("mesh_size", "radius", "length"):
+        v = getattr(b, key)
+        _require(v > 0, src, f"body.{key}", f"must be positive, got {v}")
+    _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
+    _require((b.kind == "cylinder") == (g.kind == "tube"), src, "garment.kind",
+             f"a {g.kind} needs a {'cylinder' if g.kind == 'tube' else 'mannequin or scan'} "
+             f"body (body.kind = {b.kind!r})")  # fmt: skip
+    _one_of(g.fabric, tuple(FABRICS), src, "garment.fabric")
+    _one_of(g.element, ELEMENTS, src, "garment.element")
+    _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
+    eases = g.ease.values() if isinstance(g.ease, dict) else [g.ease]
+    for e in eases:
+        _require(-0.5 < e < 1.0, src, "garment.ease", f"must lie in (-0.5, 1), got {e}")
+    fab_fields = ("E_warp", "E_weft", "G12", "B_warp", "B_weft", "thickness", "density", "nu12")
+    for k, v in g.fabric_overrides.items():
+        if k not in fab_fields:
+            raise _unknown(k, list(fab_fields), "garment.fabric_overrides", src)
+        zero_ok = k in ("density", "nu12")
+        bound = ">= 0" if zero_ok else "positive"
+        ok = v >= 0 if zero_ok else v > 0
+        _require(ok, src, f"garment.fabric_overrides.{k}", f"must be {bound}, got {v}")
+    _require(0 <= p.friction <= 2, src, "physics.friction", f"must lie in [0, 2], got {p.friction}")
+    _one_of(p.contact, CONTACT_METHODS, src, "physics.contact")
+    _require(p.tolerance > 0, src, "physics.tolerance", f"must be positive, got {p.tolerance}")
+    _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")
+    _require(p.max_updates >= 0, src, "physics.max_updates", "must be >= 0")
+    _require(d.steps >= 1, src, "dressing.steps", f"must be >= 1, got {d.steps}")
+    _require(d.margin >= 0, src, "dressing.margin", f"must be >= 0, got {d.margin}")
+    _require(d.max_cuts >= 0, src, "dressing.max_cuts", f"must be >= 0, got {d.max_cuts}")
+    _require(d.regularisation >= 0, src, "dressing.regularisation", "must be >= 0")
+    _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
+    _require(bool(s.name) and "/" not in s.name, src, "name", "must be a non-empty file name")
+
+
+# ------------------------------------------------------------------------------------------------
+# Public API
+# ------------------------------------------------------------------------------------------------
+
+
+def from_dict(data: dict, source: str = "") -> Scene:
+    """Build and validate a :class:`Scene` from a parsed TOML table."""
+    scene = _from_table(Scene, data, "", source)
+    scene = _replace_source(scene, source)
+    _check(scene)
+    return scene
+
+
+def _replace_source(scene: Scene, source: str) -> Scene:
+    from dataclasses import replace
+
+    return replace(scene, source=source)
+
+
+def load(path: str | Path) -> Scene:
+    """Read and validate a scene file; :class:`SceneError` names the file and the key."""
+    path = Path(path)
+    try:
+        data = tomllib.loads(path.read_text())
+    except FileNotFoundError:
+        raise SceneError(str(path), "", "no such scene file") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(str(path), "", f"not valid TOML: {err}") from None
+    return from_dict(data, str(path))
+
+
+def to_dict(scene: Scene) -> dict:
+    """The scene as a TOML-ready table (every key, defaults included)."""
+    d = asdict(scene)
+    d.pop("source")
+    return d
+
+
+def _toml_value(v: Any) -> str:
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, int | float):
+        return repr(v)
+    if isinstance(v, str):
+        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, list):
+        return "[" + ", ".join(_toml_value(x) for x in v) + "]"
+    if isinstance(v, dict):
+        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+    raise TypeError(f"cannot write {v!r} to TOML")
+
+
+def dumps(scene: Scene) -> str:
+    """TOML text of the scene used (defaults filled in); :func:`load` reads it back equal."""
+    d = to_dict(scene)
+    lines = [f"# scene used for this run (defaults filled in); from {scene.source or '-'}",
+             f"name = {_toml_value(d.pop('name'))}"]  # fmt: skip
+    for section, table in d.items():
+        lines += ["", f"[{section}]"]
+        lines += [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,309 @@
+"""Run a scene: build, dress, write outputs (seed paper §4.1, steps 1–12).
+
+One output folder per run, ``<output.folder>/<name>/``:
+
+* ``scene_used.toml`` — the scene with every default filled in;
+* ``dressing.bp`` — VTX (ParaView) time series, one frame per converged dressing step:
+  displacement and contact pressure on the garment (P2 fields);
+* ``final_state.xdmf`` — final displacement, contact pressure [Pa] and largest principal
+  membrane strain at the garment's nodes (one time step: ``meshio.xdmf.TimeSeriesReader``);
+* ``body_pressure.vtu`` — the body surface with the pressure at its vertices [Pa] and regions;
+  per-region statistics use the garment-side pressure at the contact points (``output``);
+* ``summary.json`` and ``pressure_regions.csv`` — per-region pressure (kPa, mmHg, comfort band),
+  contact area, penetration, strain, steps, Newton iterations, time split, dofs, ranks;
+* ``pressure_garment.png``, ``pressure_body.png`` — front and back pressure maps.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from fenics_garment import output
+from fenics_garment._stack import MPI, dolfinx, ufl
+from fenics_garment.contact import pressure as cpressure
+from fenics_garment.contact import uzawa
+from fenics_garment.scene import build as scene_build
+from fenics_garment.scene import config
+from fenics_garment.scene.dressing import DressingFailed, DressReport, DressStep, dress
+from fenics_garment.solve import NonlinearSolver
+
+#: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
+#: is loose enough for the round-off floor of a 20–100k-dof contact problem (the solver raises
+#: the absolute tolerance to 10× the measured floor by itself). A dressing step that needs more
+#: than 15 iterations is cut: on the gilet such steps ran into the 25-iteration limit anyway.
+SCENE_SNES_OPTIONS = {"snes_rtol": 1e-8, "snes_max_it": 15}
+
+
+@dataclass
+class RunResult:
+    folder: Path
+    summary: dict
+    regions: list[dict]
+    report: DressReport
+    built: object = field(repr=False)
+    completed: bool = True
+    message: str = ""
+
+
+def _membrane_strain(model) -> dolfinx.fem.Function:
+    """Largest principal Green–Lagrange membrane strain, interpolated into P1."""
+    eps = model.kinematics().membrane
+    a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
+    e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
+    V1 = dolfinx.fem.functionspace(model.geometry.mesh, ("Lagrange", 1))
+    f = dolfinx.fem.Function(V1, name="membrane_strain_max")
+    f.interpolate(dolfinx.fem.Expression(e_max, V1.element.interpolation_points))
+    return f
+
+
+class _Frames:
+    """The VTX time series: displacement and pressure (P2) at every converged step."""
+
+    def __init__(self, built, folder: Path, enabled: bool):
+        self.built, self.enabled = built, enabled
+        mesh = built.model.geometry.mesh
+        self.disp = built.model.displacement()
+        V2 = dolfinx.fem.functionspace(mesh, ("Lagrange", 2))
+        self.p = dolfinx.fem.Function(V2, name="contact_pressure")
+        self.path = folder / "dressing.bp"
+        self.tmp = folder / ".dressing.bp.part"
+        self.writer = None
+        if enabled:
+            self.writer = dolfinx.io.VTXWriter(
+                mesh.comm, self.tmp, [self.disp, self.p], engine="BP4"
+            )
+        self.k = 0
+
+    def write(self) -> None:
+        if self.writer is None:
+            return
+        m = self.built.model
+        self.disp.interpolate(m.q.sub(0).collapse())
+        self.p.interpolate(self.built.contact.pressure())
+        self.writer.write(float(self.k))
+        self.k += 1
+
+    def close(self, comm: MPI.Comm) -> None:
+        if self.writer is None:
+            return
+        self.writer.close()
+        comm.Barrier()
+        if comm.rank == 0:
+            output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp))
+        comm.Barrier()
+
+
+def _write_xdmf(folder: Path, garment, fields: dict[str, np.ndarray]) -> None:
+    """The final state on the garment's reference mesh, one time step (rank 0).
+
+    Written with meshio as XDMF with inline (XML) data: one grid holding every field, which
+    ``meshio.xdmf.TimeSeriesReader`` reads without h5py (DOLFINx's XDMFFile puts each function
+    in its own temporal collection, of which meshio reads only one).
+    """
+    import meshio
+
+    def write(tmp: Path) -> None:
+        with meshio.xdmf.TimeSeriesWriter(tmp, data_format="XML") as w:
+            w.write_points_cells(garment.points, [("triangle", garment.triangles())])
+            w.write_data(0.0, point_data=fields)
+
+    output.atomic_write(folder / "final_state.xdmf", write)
+
+
+def _write_body_vtu(folder: Path, body, point_data: dict[str, np.ndarray]) -> None:
+    """The body with pressure fields [Pa]: ``contact_pressure`` (nearest garment node, as in the
+    pictures) and ``contact_pressure_lumped`` (contact forces lumped on the body's vertices)."""
+    import meshio
+
+    mesh = meshio.Mesh(body.vertices, [("triangle", body.triangles)], point_data=point_data,
+                       cell_data={"region": [body.region]})  # fmt: skip
+    output.atomic_write(folder / "body_pressure.vtu", lambda p: meshio.write(p, mesh, "vtu"))
+
+
+def _contact_measures(built) -> dict:
+    st, c = built.contact.state, built.contact
+    comm = built.model.geometry.mesh.comm
+    f = cpressure.point_forces(st, c.traction)
+    a = cpressure.point_areas(st, c.area_stretch())
+    p = c.pressure_values()
+    p_max = comm.allreduce(float(p.max()) if len(p) else 0.0, op=MPI.MAX)
+    return {
+        "contact_area_garment_m2": comm.allreduce(float(a[f > 0].sum()), op=MPI.SUM),
+        "contact_force_N": comm.allreduce(float(f.sum()), op=MPI.SUM),
+        "max_pressure_kPa": p_max * 1e-3,
+        "max_penetration_m": max(uzawa.max_penetration(st), 0.0),
+    }
+
+
+def contact_points_by_region(built) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(body region, pressure [Pa], deformed area [m²]) of every contact point in contact,
+    gathered on all ranks; the region is that of the closest body triangle."""
+    st, c = built.contact.state, built.contact
+    comm = built.model.geometry.mesh.comm
+    p = c.pressure_values()
+    a = cpressure.point_areas(st, c.area_stretch())
+    on = p > 0
+    faces = built.search_body.closest(cpressure.positions(st)[on]).face
+    local = (built.body.region[faces], p[on], a[on])
+    parts = comm.allgather(local)
+    return tuple(np.concatenate([q[k] for q in parts]) for k in range(3))
+
+
+def run(
+    scene: config.Scene,
+    out_root: str | Path | None = None,
+    *,
+    quiet: bool = False,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    first_step: float | None = None,
+) -> RunResult:
+    """Build, dress and write every output of ``scene`` (see the module doc).
+
+    ``first_step`` (a fraction of the initial shrink) overrides the first dressing step.
+    A dressing that fails after its step cuts still writes the outputs of the last converged
+    state; the result then has ``completed = False`` and the reason in ``message``.
+    """
+    t_start = time.perf_counter()
+    say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
+    folder = Path(out_root if out_root is not None else scene.output.folder) / scene.name
+    if comm.rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
+        output.write_text(folder / "scene_used.toml", config.dumps(scene))
+    comm.Barrier()
+    times: dict[str, float] = {}
+
+    t0 = time.perf_counter()
+    say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
+        f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
+    built = scene_build.build(scene, comm)
+    times["geometry_and_model"] = time.perf_counter() - t0
+    say(f"  garment: {len(built.garment.cells)} cells, element {scene.garment.element}, "
+        f"{built.dofs} dofs ({times['geometry_and_model']:.1f} s)")  # fmt: skip
+
+    t0 = time.perf_counter()
+    say("  compiling the forms (FFCx JIT; cached for later runs) ...")
+    opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
+    solver = NonlinearSolver(built.model, built.bcs, pre_residual=[built.contact.refresh],
+                             petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
+    frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
+    times["jit"] = time.perf_counter() - t0
+
+    def on_step(rec: DressStep) -> None:
+        frames.write()
+        cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
+        say(f"  shrink {rec.shrink * 1e3:6.2f} mm   Newton its {rec.iterations:2d}   "
+            f"{rec.seconds:5.1f} s{cut}")  # fmt: skip
+
+    def on_failure(target: float, its: int, reason: int) -> None:
+        say(
+            f"  shrink → {target * 1e3:6.2f} mm failed (SNES reason {reason}, {its} its): "
+            "halving the step"
+        )
+
+    d = scene.dressing
+    p = scene.physics
+    al = (p.tolerance, p.max_updates) if p.contact == "augmented-lagrangian" else None
+    t0 = time.perf_counter()
+    completed, message = True, ""
+    try:
+        report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
+                       grow=d.grow, first_step=first_step, on_step=on_step,
+                       on_failure=on_failure, augmented_lagrangian=al)  # fmt: skip
+    except DressingFailed as err:
+        report, completed, message = err.report, False, str(err)
+        say("  " + message)
+    times["dressing"] = time.perf_counter() - t0
+    say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
+        f"{len(report.failures)} cut(s), regularisation effect on the pressure "
+        f"{report.regularisation_effect:.2%} ({times['dressing']:.1f} s)")  # fmt: skip
+    if completed:
+        frames.write()
+
+    t0 = time.perf_counter()
+    frames.close(comm)
+    strain = _membrane_strain(built.model)
+    st = built.contact.state
+    p_lumped = cpressure.body_pressure(st, built.contact.traction, built.search_body)
+    regions = output.region_table(built.body.regions, *contact_points_by_region(built))
+    x_g, p_g = garment_arrays(built)  # collective
+    eps_g = output.garment_node_values(built.garment, strain)[:, 0]
+    reach = 0.75 * scene.garment.mesh_size
+    p_body = output.nearest_node_pressure(built.body.vertices, x_g, p_g, reach)
+    measures = _contact_measures(built)
+    max_strain = comm.allreduce(float(strain.x.array.max()), op=MPI.MAX)
+    times["outputs"] = time.perf_counter() - t0
+    times["total"] = time.perf_counter() - t_start
+    summary = {
+        "scene": scene.name,
+        "completed": completed,
+        "message": message,
+        "garment": scene.garment.kind,
+        "fabric": scene.garment.fabric,
+        "element": scene.garment.element,
+        "dofs": built.dofs,
+        "garment_cells": len(built.garment.cells),
+        "body_triangles": len(built.body.triangles),
+        "ranks": comm.size,
+        **measures,
+        "max_membrane_strain": max_strain,
+        "dressing": report.as_dict(),
+        "time_s": times,
+        "solver_time_s": {
+            k: v for k, v in solver.timings.as_dict().items() if k not in ("steps", "cuts")
+        },  # LoadStepper's, unused here
+        "contact_search_s": st.timings.search_s,
+        "regions": regions,
+    }
+    if comm.rank == 0:
+        if scene.output.xdmf:
+            _write_xdmf(folder, built.garment, {"displacement": x_g - built.garment.points,
+                                                "contact_pressure": p_g,
+                                                "membrane_strain_max": eps_g})  # fmt: skip
+        output.write_summary(folder, summary, regions)
+        _write_body_vtu(folder, built.body, {"contact_pressure": p_body,
+                                             "contact_pressure_lumped": p_lumped})  # fmt: skip
+        if scene.output.pictures:
+            _pictures(folder, built, (x_g, p_g), p_body)
+    comm.Barrier()
+    _print_regions(say, regions)
+    say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
+    return RunResult(folder, summary, regions, report, built, completed, message)
+
+
+def garment_arrays(built) -> tuple[np.ndarray, np.ndarray]:
+    """Deformed garment points and nodal pressure [Pa], in gmsh node order (every rank)."""
+    mesh = built.model.geometry.mesh
+    V1v = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
+    u1 = dolfinx.fem.Function(V1v)
+    u1.interpolate(built.model.q.sub(0).collapse())
+    u = output.garment_node_values(built.garment, u1)
+    p = output.garment_node_values(built.garment, built.contact.pressure())[:, 0]
+    return built.garment.points + u, p
+
+
+def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
+    x, p = garment_xp
+    # colour bar up to the 99th percentile: a single hot node at an armhole edge would
+    # otherwise make the whole map one colour (the summary keeps the true maximum)
+    touching = p[p > 0]
+    top = float(np.percentile(touching, 99)) * 1e-3 if len(touching) else 1e-3
+    tri = built.garment.triangles()
+    b = built.body
+    output.pressure_png(folder / "pressure_garment.png", x, tri, p,
+                        f"{built.scene.garment.fabric} {built.scene.garment.kind}",
+                        under=(b.vertices, b.triangles), vmax_kpa=top)  # fmt: skip
+    output.pressure_png(folder / "pressure_body.png", b.vertices, b.triangles, p_body,
+                        "body", vmax_kpa=top)  # fmt: skip
+
+
+def _print_regions(say, regions: list[dict]) -> None:
+    say(f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6}  kPa   comfort (p95)")
+    for r in regions:
+        if r["contact_area_m2"] <= 0:
+            continue
+        say(f"  {r['region']:<12} {r['contact_area_m2'] * 1e4:7.0f}cm² {r['mean_kPa']:6.2f} "
+            f"{r['p95_kPa']:6.2f} {r['max_kPa']:6.2f}        {r['comfort']}")  # fmt: skip

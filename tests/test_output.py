@@ -1,0 +1,69 @@
+"""Output helpers: comfort bands, area-weighted statistics, atomic files (no DOLFINx needed)."""
+
+import json
+
+import numpy as np
+import pytest
+
+from fenics_garment import output, units
+
+
+@pytest.mark.parametrize(
+    "kpa, band",
+    [(0.1, "negligible"), (0.4, "comfortable"), (1.29, "comfortable"),
+     (1.5, "critical for casual wear"), (2.5, "medical/shapewear"), (3.3, "critical")],
+)  # fmt: skip
+def test_comfort_bands(kpa, band):
+    assert output.comfort_band(kpa) == band
+
+
+def test_weighted_percentile_counts_area():
+    # 90 % of the area at 1 kPa, 10 % at 5 kPa: p95 is 5, p80 is 1
+    p = np.array([1.0, 5.0])
+    a = np.array([0.9, 0.1])
+    assert output.weighted_percentile(p, a, 95) == 5.0
+    assert output.weighted_percentile(p, a, 80) == 1.0
+
+
+def test_region_table_hand_computed():
+    regions = {"waist": 7, "bust": 4}
+    region = np.array([7, 7, 7, 4])
+    p = np.array([1000.0, 3000.0, 0.0, 500.0])  # the 0-pressure point is not in contact
+    a = np.array([1.0, 1.0, 5.0, 2.0]) * 1e-4
+    rows = {r["region"]: r for r in output.region_table(regions, region, p, a)}
+    w = rows["waist"]
+    assert w["contact_area_m2"] == pytest.approx(2e-4)
+    assert w["mean_kPa"] == pytest.approx(2.0)
+    assert w["max_kPa"] == pytest.approx(3.0)
+    assert w["mean_mmHg"] == pytest.approx(2000.0 / units.MMHG)
+    assert w["comfort"] == "medical/shapewear"  # p95 = 3 kPa, in 2.0–3.3
+    assert rows["bust"]["mean_kPa"] == pytest.approx(0.5)
+    assert list(rows) == ["bust", "waist"]  # ordered by region number
+
+
+def test_nearest_node_pressure_reach():
+    body = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
+    garment = np.array([[0.0, 0.0, 0.004]])
+    p = output.nearest_node_pressure(body, garment, np.array([700.0]), reach=0.01)
+    assert p.tolist() == [700.0, 0.0]
+
+
+def test_atomic_write_leaves_no_partial_file(tmp_path):
+    path = tmp_path / "summary.json"
+    output.write_text(path, json.dumps({"a": 1}))
+    assert json.loads(path.read_text()) == {"a": 1}
+
+    def broken(tmp):
+        tmp.write_text("half")
+        raise RuntimeError("disk full")
+
+    with pytest.raises(RuntimeError):
+        output.atomic_write(path, broken)
+    assert json.loads(path.read_text()) == {"a": 1}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["summary.json"]
+
+
+def test_csv_has_units_in_header():
+    rows = output.region_table({"hips": 10}, np.array([10]), np.array([200.0]), np.array([1.0]))
+    head = output.csv_text(rows).splitlines()[0].split(",")
+    assert {"region", "mean_kPa", "p95_mmHg", "max_kPa", "contact_area_m2", "comfort"} <= set(head)

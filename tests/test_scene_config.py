@@ -1,0 +1,63 @@
+"""Scene files: defaults, round trip of the scene used, and errors that name file and key."""
+
+import tomllib
+from pathlib import Path
+
+import pytest
+
+from fenics_garment.scene import config
+
+DEMOS = Path(__file__).parent.parent / "demos"
+
+
+def _load_text(tmp_path: Path, text: str) -> config.Scene:
+    path = tmp_path / "scene.toml"
+    path.write_text(text)
+    return config.load(path)
+
+
+def test_defaults_and_round_trip(tmp_path):
+    s = _load_text(tmp_path, 'name = "x"\n[garment]\nease = { waist = -0.03 }\n')
+    assert s.garment.ease == {"waist": -0.03}
+    assert s.physics.friction == pytest.approx(0.4)
+    again = config.from_dict(tomllib.loads(config.dumps(s)))
+    assert again == s
+
+
+@pytest.mark.parametrize("name", ["cotton_gilet", "nylon_gilet", "tube_on_cylinder"])
+def test_bundled_scenes_load(name):
+    s = config.load(DEMOS / f"{name}.toml")
+    assert s.name.replace("-", "_") == name or s.name
+
+
+@pytest.mark.parametrize(
+    "text, key, words",
+    [
+        ("[garmnet]\nkind = 'gilet'\n", "garmnet", "did you mean 'garment'"),
+        ("[garment]\nfabrik = 'cotton'\n", "garment.fabrik", "did you mean 'fabric'"),
+        ("[body]\nmeasurements = { waist_grith = 0.7 }\n", "body.measurements.waist_grith",
+         "did you mean 'waist_girth'"),
+        ("[garment]\nfabric_overrides = { thickness = -0.0004 }\n",
+         "garment.fabric_overrides.thickness", "must be positive"),
+        ("[dressing]\nsteps = '4'\n", "dressing.steps", "must be an integer, got str"),
+        ("[physics]\ngravity = 1\n", "physics.gravity", "must be a boolean"),
+        ("[physics]\ncontact = 'penalti'\n", "physics.contact", "did you mean 'penalty'"),
+        ("[physics]\nfriction = -0.1\n", "physics.friction", "must lie in [0, 2]"),
+        ("[garment]\nmesh_size = 0\n", "garment.mesh_size", "must be positive"),
+        ("[garment]\nkind = 'tube'\n", "garment.kind", "needs a cylinder body"),
+    ],
+)  # fmt: skip
+def test_errors_name_file_and_key(tmp_path, text, key, words):
+    with pytest.raises(config.SceneError) as err:
+        _load_text(tmp_path, text)
+    msg = str(err.value)
+    assert str(tmp_path / "scene.toml") in msg
+    assert f"[{key}]" in msg and words in msg
+    assert err.value.key == key
+
+
+def test_invalid_toml_and_missing_file(tmp_path):
+    with pytest.raises(config.SceneError, match="not valid TOML"):
+        _load_text(tmp_path, "name = \n")
+    with pytest.raises(config.SceneError, match="no such scene file"):
+        config.load(tmp_path / "nope.toml")

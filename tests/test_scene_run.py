@@ -1,0 +1,126 @@
+"""A whole scene run on the cheapest garment: a tight tube dressed onto a rigid cylinder.
+
+Checked against Laplace's law for a tube with free ends (``contact.scenes.tube_pressure``), with
+the adaptive dressing forced to cut its first step, and the outputs read back.
+"""
+
+import csv
+import json
+import tempfile
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from fenics_garment._stack import MPI
+from fenics_garment.contact import pressure as cpressure
+from fenics_garment.contact.scenes import tube_pressure
+from fenics_garment.scene import config
+from fenics_garment.scene.run import run
+
+SCENE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
+
+
+def _scene(**solver) -> config.Scene:
+    s = config.load(SCENE)
+    return replace(s, solver=config.SolverConfig(petsc=solver)) if solver else s
+
+
+def _mid_pressure(result) -> float:
+    """Force over deformed area of the contact points in the middle half of the tube."""
+    b = result.built
+    st, c = b.contact.state, b.contact
+    f = cpressure.point_forces(st, c.traction)
+    a = cpressure.point_areas(st, c.area_stretch())
+    z = cpressure.positions(st)[:, 2]
+    sel = np.abs(z - 0.1) < 0.05
+    comm = b.model.geometry.mesh.comm
+    return comm.allreduce(f[sel].sum(), op=MPI.SUM) / comm.allreduce(a[sel].sum(), op=MPI.SUM)
+
+
+def _laplace(result) -> float:
+    b = result.built
+    s = b.model.stiffness
+    R = result.built.scene.body.radius
+    r0 = R + b.garment.level("mid").clearance
+    return tube_pressure(R + s.thickness / 2, r0, s, warp="axial")
+
+
+def _shared_tmp(comm) -> Path:
+    return Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))
+
+
+@pytest.fixture(scope="module")
+def tube_run():
+    # the whole shrink in one step with at most 4 Newton iterations (it needs 5): a cut is forced
+    comm = MPI.COMM_WORLD
+    return run(_scene(snes_max_it=4), _shared_tmp(comm), quiet=True, first_step=1.0)
+
+
+def test_dressing_cuts_the_step_and_completes(tube_run):
+    rep = tube_run.report
+    assert tube_run.completed
+    assert len(rep.failures) >= 1 and rep.failures[0][0] == 0.0  # the first target was s = 0
+    assert rep.steps[0].cuts >= 1
+    assert rep.final_regularisation == 0.0 and rep.regularisation_effect < 1e-2
+
+
+def test_pressure_obeys_laplace(tube_run):
+    # faceted body (5 mm triangles), P1 shell, penalty κ̂ = 10: a few tenths of a percent each
+    assert _mid_pressure(tube_run) == pytest.approx(_laplace(tube_run), rel=0.02)
+    row = tube_run.regions[0]
+    assert row["region"] == "cylinder"
+    assert row["mean_kPa"] == pytest.approx(_laplace(tube_run) * 1e-3, rel=0.05)
+
+
+def test_outputs_read_back(tube_run):
+    folder = tube_run.folder
+    summary = json.loads((folder / "summary.json").read_text())
+    assert summary["completed"] and summary["ranks"] == MPI.COMM_WORLD.size
+    assert summary["dofs"] == tube_run.built.dofs
+    assert summary["dressing"]["cuts"] >= 1
+    rows = list(csv.DictReader((folder / "pressure_regions.csv").open()))
+    assert float(rows[0]["mean_kPa"]) == pytest.approx(tube_run.regions[0]["mean_kPa"], rel=1e-5)
+    assert config.load(folder / "scene_used.toml") == replace(
+        config.load(SCENE), solver=config.SolverConfig(petsc={"snes_max_it": 4}),
+        source=str(folder / "scene_used.toml"),
+    )  # fmt: skip
+    assert (folder / "dressing.bp").is_dir()
+    assert (folder / "pressure_garment.png").stat().st_size > 10_000
+    assert (folder / "pressure_body.png").stat().st_size > 10_000
+    assert not list(folder.glob(".*part*"))  # no temporary files left
+    meshio = pytest.importorskip("meshio")
+    body = meshio.read(folder / "body_pressure.vtu")
+    assert body.point_data["contact_pressure"].max() > 0
+    with meshio.xdmf.TimeSeriesReader(str(folder / "final_state.xdmf")) as reader:
+        points, _ = reader.read_points_cells()
+        _, point_data, _ = reader.read_data(0)
+    p = point_data["contact_pressure"]
+    assert len(p) == len(points) and p.max() == pytest.approx(
+        summary["max_pressure_kPa"] * 1e3, rel=0.2
+    )
+    assert np.abs(point_data["displacement"]).max() > 1e-3  # the tube was stretched open
+
+
+def test_failed_dressing_keeps_last_state(tmp_path_factory):
+    comm = MPI.COMM_WORLD
+    scene = _scene(snes_max_it=2)
+    scene = replace(scene, dressing=replace(scene.dressing, max_cuts=0))
+    result = run(scene, _shared_tmp(comm), quiet=True, first_step=1.0)
+    assert not result.completed and "dressing stopped" in result.message
+    summary = json.loads((result.folder / "summary.json").read_text())
+    assert summary["completed"] is False and "last converged state" in summary["message"]
+
+
+@pytest.mark.mpi
+def test_one_and_two_ranks_agree():
+    """Run the scene on all ranks and on each rank alone: the same pressures and iterations."""
+    world = run(_scene(), _shared_tmp(MPI.COMM_WORLD), quiet=True)
+    alone = run(_scene(), Path(tempfile.mkdtemp()), quiet=True, comm=MPI.COMM_SELF)
+    # equal up to where Newton stops (rtol 1e-8 on the residual; measured 4e-6 on the max)
+    for key in ("max_pressure_kPa", "contact_area_garment_m2", "contact_force_N"):
+        assert world.summary[key] == pytest.approx(alone.summary[key], rel=1e-4)
+    assert world.report.newton_iterations == alone.report.newton_iterations
+    assert world.regions[0]["mean_kPa"] == pytest.approx(alone.regions[0]["mean_kPa"], rel=1e-4)
+    assert world.summary["ranks"] == MPI.COMM_WORLD.size and alone.summary["ranks"] == 1
