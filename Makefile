@@ -30,7 +30,7 @@ $(STAMP): pyproject.toml | $(PY)
 	@touch $(STAMP)
 
 demo: $(STAMP)
-	$(VENV)/bin/fenics-garment demo
+	$(MPIEXEC) -n $(NP) $(VENV)/bin/fenics-garment demo
 
 test: test-serial test-mpi
 

@@ -26,7 +26,7 @@ class Demo:
     run: Callable[..., int]
 
 
-def _semicylinder(output: Path, quiet: bool = False, n: int = 16, steps: int = 10) -> int:
+def _semicylinder(output: Path, quiet: bool = False, n: int = 20, steps: int = 5) -> int:
     from fenics_garment._stack import MPI, dolfinx
     from fenics_garment.materials import Isotropic
     from fenics_garment.shell import bcs as B
@@ -157,4 +157,4 @@ REGISTRY: dict[str, Demo] = {
         _scene_demo("tube_on_cylinder.toml"),
     ),
 }
-DEFAULT = "semicylinder"
+DEFAULT = "cotton-gilet"

@@ -172,7 +172,15 @@ class NonlinearSolver:
             jit_options=JIT_OPTIONS if jit_options is None else jit_options,
         )  # fmt: skip
         self.timings.jit += time.perf_counter() - t0
-        self._setup_linear_solver(opts, prefix)
+        try:
+            self._setup_linear_solver(opts, prefix)
+        except PETSc.Error as e:
+            given = {k: v for k, v in (petsc_options or {}).items()
+                     if k.startswith(("ksp_", "pc_", "mat_"))}  # fmt: skip
+            raise ValueError(
+                f"PETSc rejected the linear-solver options {given or opts}: error code {e.ierr} "
+                "(unknown type or value; see https://petsc.org/release/manualpages/KSP/)"
+            ) from e
         self.f_point = point_load_vector(model, point_loads) if point_loads else None
         if self.f_point is not None:
             self._zero_bc_rows(self.f_point)

@@ -127,3 +127,20 @@ def test_unknown_measurement_name():
 def test_landmarks_out_of_order():
     with pytest.raises(ValueError, match=r"heights must increase"):
         measurements("88", waist_height=0.80)
+
+
+# -- PETSc options ------------------------------------------------------------------------------
+def test_petsc_option_petsc_rejects():
+    from fenics_garment._stack import MPI
+    from fenics_garment.materials import Isotropic
+    from fenics_garment.shell.geometry import parametric_surface_mesh
+    from fenics_garment.shell.kinematics import ShellGeometry
+    from fenics_garment.shell.model import ShellModel
+    from fenics_garment.solve import NonlinearSolver
+
+    mesh = parametric_surface_mesh(
+        MPI.COMM_SELF, lambda x, y: np.array([x, y, 0 * x]), (0, 1), (0, 1), (2, 2)
+    )
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(1, 0, 0)), Isotropic(1e6, 0.3, 1e-2))
+    with pytest.raises(ValueError, match=r"PETSc rejected.*no_such_krylov"):
+        NonlinearSolver(model, [], petsc_options={"ksp_type": "no_such_krylov"})

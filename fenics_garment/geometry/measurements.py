@@ -114,6 +114,11 @@ _ASTM_IN = {
 # EN 13402-3 bust-girth codes [cm] offered; hip = bust + 8 cm (our assumption, see module doc).
 _EN_BUST_CM = (80, 84, 88, 92, 96, 100, 104)
 
+#: Every size code :func:`measurements` accepts.
+SIZE_CODES: tuple[str, ...] = tuple(str(b) for b in _EN_BUST_CM) + tuple(
+    f"US{s}" for s in _ASTM_SIZES
+)
+
 
 def astm_table(figure: str = "curvy") -> dict[str, np.ndarray]:
     """The ASTM D5585-11e1 torso girths in metres, one array per measurement, sizes 00 … 20."""

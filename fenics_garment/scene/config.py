@@ -240,14 +240,14 @@ def _one_of(value: str, allowed: tuple[str, ...], src: str, key: str) -> None:
 
 
 def _check(s: Scene) -> None:
-    from fenics_garment.geometry.measurements import _SIZE_STEPS, Measurements
+    from fenics_garment.geometry.measurements import SIZE_CODES, Measurements
     from fenics_garment.materials import FABRICS
 
     src = s.source
     b, g, p, d = s.body, s.garment, s.physics, s.dressing
     _one_of(b.kind, BODY_KINDS, src, "body.kind")
     if b.kind == "mannequin":
-        _one_of(b.size, tuple(_SIZE_STEPS), src, "body.size")
+        _one_of(b.size, SIZE_CODES, src, "body.size")
         known = [f.name for f in fields(Measurements)]
         for k, v in b.measurements.items():
             if k not in known:
