@@ -18,6 +18,7 @@ regularisation's effect.
 
 from __future__ import annotations
 
+import math
 import time
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -65,7 +66,10 @@ class DressReport:
             ],
             "cuts": len(self.failures),
             "newton_iterations": self.newton_iterations,
-            "regularisation_effect": self.regularisation_effect,
+            # null (not NaN, which is not JSON) when the spring could not be released
+            "regularisation_effect": (
+                None if math.isnan(self.regularisation_effect) else self.regularisation_effect
+            ),
             "final_regularisation_Pa_per_m": self.final_regularisation,
             "augmented_lagrangian_updates": self.al_updates,
             "augmented_lagrangian_penetration_m": self.al_penetration,
@@ -209,19 +213,23 @@ def dress(
 
 
 def _release(rep: DressReport, built, solver: NonlinearSolver, comm: MPI.Comm) -> None:
-    """Final solves at s = 0 with the spring released in stages, c = c₀/10, c₀/100, then 0.
+    """Final solves at s = 0 with the spring released in stages c₀/10 … c₀/10⁴, then 0.
 
-    The answer is the c = 0 state; the pressure change of the last stage (c₀/100 → 0) is
-    reported as the regularisation's effect. A stage that fails (the garment is still free to
-    move without the spring, e.g. a frictionless tube can spin) is undone and the previous
-    state, with its c, is kept and reported.
+    The answer is the c = 0 state; the pressure change of the last stage is reported as the
+    regularisation's effect. A stage that fails is undone and retried from half-way (in log c),
+    up to three times; then the previous state, with its c, is kept and reported
+    (``final_regularisation`` > 0; the effect is then that of the last stage that converged, NaN
+    if none did: the answer still carries the spring).
     """
     model, contact, reg = built.model, built.contact, built.regularisation
     if reg.c0 == 0.0:
         rep.regularisation_effect = 0.0
         return
     rep.final_regularisation = float(reg.c.value)
-    for c in (0.1 * reg.c0, 0.01 * reg.c0, 0.0):
+    stages = [0.1 * reg.c0, 0.01 * reg.c0, 1e-3 * reg.c0, 1e-4 * reg.c0, 0.0]
+    retries = 0
+    while stages:
+        c = stages.pop(0)
         before = contact.pressure_values()
         q_conv = model.q.x.array.copy()
         c_prev = float(reg.c.value)
@@ -233,7 +241,12 @@ def _release(rep: DressReport, built, solver: NonlinearSolver, comm: MPI.Comm) -
             model.q.x.scatter_forward()
             reg.c.value = c_prev
             contact.state.refresh()
-            return
+            if retries == 3 or c_prev == 0.0:
+                return
+            retries += 1
+            mid = (c_prev * max(c, 1e-5 * reg.c0)) ** 0.5  # half-way in log c
+            stages = [mid, c, *stages]
+            continue
         rep.steps.append(DressStep(0.0, its, reason, 0, 0.0, c))
         rep.final_regularisation = c
         rep.regularisation_effect = _max_pressure_change(contact, before, comm)

@@ -218,8 +218,14 @@ def run(
         say("  " + message)
     times["dressing"] = time.perf_counter() - t0
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
-        f"{len(report.failures)} cut(s), regularisation effect on the pressure "
-        f"{report.regularisation_effect:.2%} ({times['dressing']:.1f} s)")  # fmt: skip
+        f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
+    if report.final_regularisation > 0:
+        say(f"  WARNING: the stabilising spring is not fully released: c = "
+            f"{report.final_regularisation:.3g} Pa/m remains (its last release changed the "
+            f"pressure by {report.regularisation_effect:.2%})")  # fmt: skip
+    else:
+        say(f"  releasing the stabilising spring changed the pressure by "
+            f"{report.regularisation_effect:.2%} in its last stage")  # fmt: skip
     if completed:
         frames.write()
 
