@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from fenics_garment._stack import MPI, dolfinx, ufl
-from fenics_garment.contact import search, terms
+from fenics_garment.contact import search
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.geometry import garments as gm
 from fenics_garment.geometry.body import BodySurface
@@ -105,16 +105,6 @@ def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
     return Regularisation(c, c0, q_prev)
 
 
-def add_friction(contact: shell_contact.ShellContact, mu: float) -> dolfinx.fem.Constant:
-    """Coulomb friction (stick penalty = the normal penalty) on an attached contact."""
-    model, state = contact.model, contact.state
-    mu_c = dolfinx.fem.Constant(model.geometry.mesh, dolfinx.default_scalar_type(mu))
-    t_t = terms.friction_traction(state, mu_c, contact.kappa, contact.traction)
-    v_u = ufl.split(ufl.TestFunction(model.Q))[0]
-    model.add_residual(-ufl.dot(t_t, v_u) * state.dx)
-    return mu_c
-
-
 @dataclass
 class Built:
     """Everything a dressing run needs."""
@@ -161,8 +151,9 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     p = scene.physics
     gravity = model.add_gravity() if p.gravity else None
     sbody = contact_body(body)
-    contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model))
-    mu = add_friction(contact, p.friction) if p.friction > 0 else None
+    contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model),
+                                   mu=p.friction if p.friction > 0 else None)  # fmt: skip
+    mu = contact.friction.mu if contact.friction else None
     c0 = scene.dressing.regularisation / p.kappa_hat * float(contact.kappa.value)
     reg = add_regularisation(model, c0)
     return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
