@@ -48,7 +48,7 @@ class ShellContact:
         self.state.refresh()
 
     def accept_step(self) -> None:
-        """After a converged load step: the slip increment of friction restarts from here."""
+        """After a converged load step: friction's anchor moves by the plastic slip only."""
         self.state.accept_step()
 
     @property
@@ -105,6 +105,7 @@ def attach(
         friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), k)
     v_u = ufl.split(ufl.TestFunction(model.Q))[0]
     model.add_residual(terms.contact_residual(state, v_u, k, friction))
+    state.friction, state.kappa = friction, k  # for the friction return map in accept_step
     return ShellContact(model, state, k, friction)
 
 

@@ -148,6 +148,8 @@ class ContactState:
             self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
         self.timings = Timings()
         self.u_k.x.array[:] = 0.0
+        self.friction = None  # terms.Friction: set by contact.shell.attach
+        self.kappa: dolfinx.fem.Constant | None = None  # normal penalty (friction's t_N)
 
     # -- the pre-residual hook ------------------------------------------------------------------
     def refresh(self, _: dolfinx.fem.Function | None = None) -> None:
@@ -192,8 +194,29 @@ class ContactState:
         return self.gap + ufl.dot(self.normal_fn, self.u - self.u_k)
 
     def accept_step(self) -> None:
-        """Mark the current state as converged: the friction slip restarts from here."""
-        self.u_old.x.array[:] = self.u_k.x.array
+        """Mark the current state as converged: the friction slip restarts from here.
+
+        With friction (``self.friction``, set by :func:`fenics_garment.contact.shell.attach`) the
+        anchor u_old moves by the plastic part of the slip only (return mapping): a point that
+        sticks keeps its anchor, so the tangential traction it carries (e.g. holding a garment
+        up against gravity) is carried on into the next step instead of restarting from zero —
+        restarting let a sustained tangential load creep by μ t_N / κ_T every step. A point that
+        slips keeps the elastic slip μ t_N / κ_T, so its traction stays on the Coulomb cone.
+        """
+        if self.friction is None:
+            self.u_old.x.array[:] = self.u_k.x.array
+            return
+        mu = float(self.friction.mu.value)
+        kappa_t = float(self.friction.kappa_t.value)
+        du = (self.u_k.x.array - self.u_old.x.array).reshape(-1, 3)
+        n = self.normal_fn.x.array.reshape(-1, 3)
+        du_t = du - np.sum(du * n, axis=1)[:, None] * n
+        # t_N at u = u_k, where the linearised gap is the refreshed gap
+        kappa_n = float(self.kappa.value) if self.kappa is not None else kappa_t
+        t_n = np.maximum(self.lam.x.array - kappa_n * self.gap.x.array, 0.0)
+        trial = kappa_t * np.linalg.norm(du_t, axis=1)
+        scale = np.where(trial <= mu * t_n, 1.0, mu * t_n / np.maximum(trial, 1e-300))
+        self.u_old.x.array[:] += ((1.0 - scale)[:, None] * du_t).ravel()
 
     def local_values(self, f: dolfinx.fem.Function) -> F64:
         """The owned point values of a quadrature Function (scalar (n,) or vector (n, 3))."""
