@@ -123,21 +123,6 @@ def region_table(
     return rows
 
 
-def nearest_node_pressure(
-    body_vertices: Array, garment_points: Array, p_garment: Array, reach: float
-) -> Array:
-    """Pressure on the body for pictures: each body vertex takes the pressure of the nearest
-    deformed garment node within ``reach`` [m] (0 elsewhere): smooth whatever the two meshes'
-    sizes, unlike the vertex-lumped force."""
-    from scipy.spatial import cKDTree
-
-    d, i = cKDTree(garment_points).query(body_vertices, distance_upper_bound=reach)
-    out = np.zeros(len(body_vertices))
-    hit = np.isfinite(d)
-    out[hit] = p_garment[i[hit]]
-    return out
-
-
 def csv_text(rows: list[dict]) -> str:
     buf = io.StringIO()
     if rows:

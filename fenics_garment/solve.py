@@ -328,6 +328,27 @@ class NonlinearSolver:
         self.timings.solve += dt
         return its, reason
 
+    def residual_norm(self) -> float:
+        """‖F(q)‖ at the current ``model.q`` (pre-residual hooks run, BCs applied)."""
+        p = self.problem
+        dolfinx.fem.petsc.assign(self.model.q, p.x)
+        p.solver.computeFunction(p.x, p.b)
+        return float(p.b.norm())
+
+    def raise_atol(self, atol: float) -> float:
+        """Absolute residual tolerance of the following solves: at least ``atol``; returns it."""
+        snes = self.problem.solver
+        atol = max(snes.getTolerances()[1], atol)
+        snes.setTolerances(atol=atol)
+        return atol
+
+    def set_max_it(self, max_it: int) -> int:
+        """Newton iteration limit of the following solves; returns the previous limit."""
+        snes = self.problem.solver
+        previous = snes.getTolerances()[3]
+        snes.setTolerances(max_it=max_it)
+        return previous
+
     def set_rtol(self, rtol: float) -> None:
         """Change the relative (residual and step) tolerance of the following solves."""
         self.problem.solver.setTolerances(rtol=rtol)

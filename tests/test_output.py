@@ -41,13 +41,6 @@ def test_region_table_hand_computed():
     assert list(rows) == ["bust", "waist"]  # ordered by region number
 
 
-def test_nearest_node_pressure_reach():
-    body = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]])
-    garment = np.array([[0.0, 0.0, 0.004]])
-    p = output.nearest_node_pressure(body, garment, np.array([700.0]), reach=0.01)
-    assert p.tolist() == [700.0, 0.0]
-
-
 def test_atomic_write_leaves_no_partial_file(tmp_path):
     path = tmp_path / "summary.json"
     output.write_text(path, json.dumps({"a": 1}))

@@ -22,7 +22,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from fenics_garment._stack import dolfinx, ufl
+from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure, terms
 from fenics_garment.contact.search import BodySurface
 from fenics_garment.contact.state import ContactState
@@ -63,6 +63,17 @@ class ShellContact:
         """Pressure [Pa] at the owned contact points (force per deformed area)."""
         return pressure.garment_pressure(self.state, self.traction, self.area_stretch())
 
+    def reaction(self, direction=(0.0, 0.0, 1.0)) -> float:
+        """Total force [N] of the body on the garment along ``direction``: normal and friction
+        tractions at the contact points, −R_c(e) for the constant test field e (collective).
+
+        At equilibrium with no other support it balances the garment's weight — a conservation
+        check that a regularising spring carries none of it."""
+        e = ufl.as_vector([float(d) for d in direction])
+        form = dolfinx.fem.form(-terms.contact_residual(self.state, e, self.kappa, self.friction))
+        comm = self.state.mesh.comm
+        return comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
+
     def pressure(self, name: str = "contact_pressure") -> dolfinx.fem.Function:
         """Contact pressure as a P1 Function on the garment (for XDMF/VTX output)."""
         return pressure.pressure_function(self.state, self.traction, self.area_stretch(), name=name)
@@ -78,6 +89,7 @@ def attach(
     normal: str = "gradient",
     band: float = 0.02,
     mu: float | None = None,
+    stick_ratio: float = 1.0,
 ) -> ShellContact:
     """Add normal contact with ``body`` to ``model`` (before the solver is built).
 
@@ -94,7 +106,7 @@ def attach(
     mesh = model.geometry.mesh
     s = model.stiffness
     if kappa is None:
-        h_max = mesh.comm.allreduce(float(model.h_cell.x.array.max()), op=_max())
+        h_max = mesh.comm.allreduce(float(model.h_cell.x.array.max()), op=MPI.MAX)
         kappa = terms.default_penalty(s.membrane_scale, h_max, kappa_hat)
     state = ContactState(
         mesh, model.u, body, offset=s.thickness / 2, rule=rule, normal=normal, band=band
@@ -102,14 +114,9 @@ def attach(
     k = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa))
     friction = None
     if mu is not None:
-        friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), k)
+        kt = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa * stick_ratio))
+        friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), kt)
     v_u = ufl.split(ufl.TestFunction(model.Q))[0]
     model.add_residual(terms.contact_residual(state, v_u, k, friction))
     state.friction, state.kappa = friction, k  # for the friction return map in accept_step
     return ShellContact(model, state, k, friction)
-
-
-def _max():
-    from fenics_garment._stack import MPI
-
-    return MPI.MAX

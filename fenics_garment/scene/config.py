@@ -124,6 +124,7 @@ class OutputConfig:
     xdmf: bool = True
     pictures: bool = True
     every_step: bool = True  # VTX frame per dressing step (else only the final state)
+    error_bars: bool = False  # also solve on a 2× coarser garment: Richardson error bars
 
 
 @dataclass(frozen=True)

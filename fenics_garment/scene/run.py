@@ -115,8 +115,9 @@ def _write_xdmf(folder: Path, garment, fields: dict[str, np.ndarray]) -> None:
 
 
 def _write_body_vtu(folder: Path, body, point_data: dict[str, np.ndarray]) -> None:
-    """The body with pressure fields [Pa]: ``contact_pressure`` (nearest garment node, as in the
-    pictures) and ``contact_pressure_lumped`` (contact forces lumped on the body's vertices)."""
+    """The body with pressure fields [Pa]: ``contact_pressure`` (the garment's pressure at the
+    closest point of the deformed garment, as in the pictures) and ``contact_pressure_lumped``
+    (contact forces lumped on the body's vertices)."""
     import meshio
 
     mesh = meshio.Mesh(body.vertices, [("triangle", body.triangles)], point_data=point_data,
@@ -167,6 +168,10 @@ def run(
     A dressing that fails after its step cuts still writes the outputs of the last converged
     state; the result then has ``completed = False`` and the reason in ``message``.
     """
+    if scene.output.error_bars:  # two mesh levels (scene.error_bars)
+        from fenics_garment.scene.error_bars import run_with_error_bars
+
+        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm, first_step=first_step)
     t_start = time.perf_counter()
     say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
     folder = Path(out_root if out_root is not None else scene.output.folder) / scene.name
@@ -195,8 +200,9 @@ def run(
     def on_step(rec: DressStep) -> None:
         frames.write()
         cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
-        say(f"  shrink {rec.shrink * 1e3:6.2f} mm   Newton its {rec.iterations:2d}   "
-            f"{rec.seconds:5.1f} s{cut}")  # fmt: skip
+        what = (f"shrink {rec.shrink * 1e3:6.2f} mm" if rec.stage == "dress"
+                else f"spring c {rec.regularisation:8.2g} Pa/m")  # fmt: skip
+        say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
 
     def on_failure(target: float, its: int, reason: int) -> None:
         say(
@@ -238,7 +244,8 @@ def run(
     x_g, p_g = garment_arrays(built)  # collective
     eps_g = output.garment_node_values(built.garment, strain)[:, 0]
     reach = 0.75 * scene.garment.mesh_size
-    p_body = output.nearest_node_pressure(built.body.vertices, x_g, p_g, reach)
+    p_body = cpressure.body_pressure_map(built.contact.pressure(), built.model.displacement(),
+                                         built.body.vertices, reach)  # fmt: skip
     measures = _contact_measures(built)
     max_strain = comm.allreduce(float(strain.x.array.max()), op=MPI.MAX)
     times["outputs"] = time.perf_counter() - t0

@@ -1,0 +1,108 @@
+"""Discretisation error bars on the per-region pressures: the scene solved on two garment meshes.
+
+If a statistic converges as Q_h = Q + C h^r, the solutions on the garment mesh h and on the
+coarser mesh 2h give the Richardson estimate of the fine solution's error,
+
+    Q_h − Q ≈ (Q_h − Q_2h) / (2^r − 1).
+
+The rate r of the scene's statistics is not known in advance (contact switches, region borders
+and the 95th percentile are not smooth functionals of the solution), so the bar uses r = 1,
+which is three times the r = 2 estimate: on the tight tube with the P1 shell the measured rate of
+the mean pressure is about 2 (``tests/test_scene_error_bars.py`` checks that the bar covers the
+true error against Laplace's law). The coarse level costs about a quarter of the fine one.
+
+Each region row gets ``<stat>_err_kPa`` / ``<stat>_err_mmHg`` for mean, p95 and max, and
+``comfort_range``: the comfort bands that p95 ± its error bar touches (one band when the bar
+does not cross a band boundary).
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+from fenics_garment import output, units
+from fenics_garment._stack import MPI
+from fenics_garment.scene import config
+
+#: Convergence rate assumed for the bars (see the module doc).
+RATE = 1.0
+STATS = ("mean", "p95", "max")
+
+
+def richardson_error(fine: float, coarse: float, rate: float = RATE) -> float:
+    """|Q_h − Q_2h| / (2^r − 1): the estimated error of the fine value (module doc)."""
+    return abs(fine - coarse) / (2.0**rate - 1.0)
+
+
+def comfort_range(p_kpa: float, err_kpa: float) -> str:
+    """The comfort bands touched by p ± err, e.g. ``"comfortable"`` or
+    ``"negligible … comfortable"``."""
+    low, high = output.comfort_band(max(p_kpa - err_kpa, 0.0)), output.comfort_band(p_kpa + err_kpa)
+    return low if low == high else f"{low} … {high}"
+
+
+def attach(fine: list[dict], coarse: list[dict], rate: float = RATE) -> list[dict]:
+    """The fine region rows with error bars from the coarse rows (matched by region name)."""
+    by_name = {r["region"]: r for r in coarse}
+    rows = []
+    for r in fine:
+        c = by_name.get(r["region"])
+        row = dict(r)
+        for s in STATS:
+            err = richardson_error(r[f"{s}_kPa"], c[f"{s}_kPa"], rate) if c else float("nan")
+            row[f"{s}_err_kPa"] = err
+            row[f"{s}_err_mmHg"] = units.pa_to_mmhg(units.kpa_to_pa(err))
+        row["comfort_range"] = comfort_range(r["p95_kPa"], row["p95_err_kPa"]) if c else ""
+        rows.append(row)
+    return rows
+
+
+def coarse_scene(scene: config.Scene) -> config.Scene:
+    """The scene on the coarser garment mesh (2h), with no files but the summary."""
+    g = replace(scene.garment, mesh_size=2.0 * scene.garment.mesh_size)
+    o = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
+    return replace(scene, garment=g, output=o)
+
+
+def run_with_error_bars(
+    scene: config.Scene,
+    out_root: str | Path | None = None,
+    *,
+    quiet: bool = False,
+    comm: MPI.Comm = MPI.COMM_WORLD,
+    **kwargs,
+):
+    """Run ``scene`` on the meshes 2h then h; the fine run's summary and CSV get error bars.
+
+    The coarse run's own outputs go to ``<out>/<name>/coarse_level/``.
+    """
+    from fenics_garment.scene.run import run
+
+    say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
+    root = Path(out_root if out_root is not None else scene.output.folder)
+    say(f"error bars: solving on the coarser garment mesh first "
+        f"(mesh_size {2 * scene.garment.mesh_size:g} m)")  # fmt: skip
+    coarse = run(coarse_scene(scene), root / scene.name / "coarse_level", quiet=True, comm=comm,
+                 **kwargs)  # fmt: skip
+    fine_scene = replace(scene, output=replace(scene.output, error_bars=False))
+    fine = run(fine_scene, root, quiet=quiet, comm=comm, **kwargs)
+    rows = attach(fine.regions, coarse.regions)
+    fine.summary["regions"] = rows
+    fine.summary["error_bars"] = {
+        "method": "Richardson, garment meshes h and 2h",
+        "rate": RATE,
+        "coarse_dofs": coarse.summary["dofs"],
+        "coarse_completed": coarse.completed,
+        "coarse_time_s": coarse.summary["time_s"]["total"],
+    }
+    if comm.rank == 0:
+        output.write_summary(fine.folder, fine.summary, rows)
+    comm.Barrier()
+    fine.regions = rows
+    say(f"  {'region':<12} {'p95 ± error':>16}  kPa   comfort range")
+    for r in rows:
+        if r["contact_area_m2"] > 0:
+            say(f"  {r['region']:<12} {r['p95_kPa']:7.2f} ± {r['p95_err_kPa']:5.2f}        "
+                f"{r['comfort_range']}")  # fmt: skip
+    return fine
