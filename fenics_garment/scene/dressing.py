@@ -252,10 +252,11 @@ def _release(
     The spring pulls towards the previous step, so each solve is an exact equilibrium up to the
     spring traction c |u − u_prev|; while the garment still moves (a loose skirt finding its
     drape under gravity) the spring keeps Newton in its basin, and once it has stopped moving
-    the spring does no work. After an easy solve (≤ :data:`EASY_ITS` iterations) c is divided
-    by 10, after a harder one by 3 (up to :data:`RELEASE_MAX_IT` iterations are allowed); a
-    failed solve is undone and c raised back half-way (in log c) towards the last c that
-    converged; c below c₀·:data:`C_ZERO` becomes 0. The answer is the c = 0 solve, and the
+    the spring does no work. After a solve that moved the garment by less than :data:`SETTLED`,
+    c is divided by 10 (easy: ≤ :data:`EASY_ITS` iterations) or 3, else kept; up to
+    :data:`RELEASE_MAX_IT` Newton iterations are allowed per solve. A failed solve is undone and
+    c raised back half-way (in log c) towards the last c that converged, or to 3c if it was
+    that c; c below c₀·:data:`C_ZERO` becomes 0. The answer is the c = 0 solve, and the
     pressure change of that last solve is reported as the regularisation's effect. After
     :data:`MAX_FAILS` failures in a row or :data:`MAX_RELEASE_SOLVES` solves the last converged
     state is kept with its c (``final_regularisation`` > 0) and the effect is that of its last
@@ -276,6 +277,7 @@ def _release(
 
 def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
     model, contact, reg = built.model, built.contact, built.regularisation
+    u_dofs = model.Q.sub(0).collapse()[1]
     fails = 0
     for _ in range(MAX_RELEASE_SOLVES):
         before = contact.pressure_values()
@@ -292,10 +294,14 @@ def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
             if fails > MAX_FAILS:
                 reg.c.value = rep.final_regularisation
                 return
-            # back half-way (in log c) towards the last c that converged
-            c = (rep.final_regularisation * c) ** 0.5 if c > 0 else C_ZERO * reg.c0
+            # back half-way (in log c) towards the last c that converged, or, if that c itself
+            # failed (the garment is still moving: a skirt folding), a stiffer spring
+            last = rep.final_regularisation
+            c = C_ZERO * reg.c0 if c == 0 else ((last * c) ** 0.5 if c < 0.999 * last else 3 * c)
             continue
         fails = 0
+        moved = np.abs(model.q.x.array[u_dofs] - reg.q_prev.x.array[u_dofs])
+        moved = comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
         rep.steps.append(rec)
         rep.final_regularisation = c
@@ -306,13 +312,21 @@ def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
             on_step(rec)
         if c == 0.0:
             return
-        c /= 10.0 if its <= EASY_ITS else 3.0
+        if moved <= SETTLED:  # else the same c again: the garment is still moving
+            c /= 10.0 if its <= EASY_ITS else 3.0
         if c < C_ZERO * reg.c0:
             c = 0.0
 
 
 #: Release schedule of :func:`_release`.
+#: A spring not released to 0 whose last weakening changed the pressure by less than this is
+#: reported as negligible (else the run warns).
+RELEASE_TOLERANCE = 0.01
 EASY_ITS = 4
+#: A release solve that moved the garment by more than this [m] is repeated with the same c: on
+#: the cotton dress the skirt settles by 1–3 mm per solve at c₀, and weakening the spring while
+#: it still moved made every solve below c ≈ 500 Pa/m fail.
+SETTLED = 5e-4
 C_ZERO = 1e-5
 MAX_FAILS = 4
 MAX_RELEASE_SOLVES = 40

@@ -28,7 +28,13 @@ from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.scene import build as scene_build
 from fenics_garment.scene import config
-from fenics_garment.scene.dressing import DressingFailed, DressReport, DressStep, dress
+from fenics_garment.scene.dressing import (
+    RELEASE_TOLERANCE,
+    DressingFailed,
+    DressReport,
+    DressStep,
+    dress,
+)
 from fenics_garment.solve import NonlinearSolver
 
 #: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
@@ -225,13 +231,18 @@ def run(
     times["dressing"] = time.perf_counter() - t0
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
         f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
-    if report.final_regularisation > 0:
+    effect = report.regularisation_effect
+    if report.final_regularisation > 0 and not effect <= RELEASE_TOLERANCE:
         say(f"  WARNING: the stabilising spring is not fully released: c = "
             f"{report.final_regularisation:.3g} Pa/m remains (its last release changed the "
-            f"pressure by {report.regularisation_effect:.2%})")  # fmt: skip
+            f"pressure by {effect:.2%}, more than {RELEASE_TOLERANCE:.0%})")  # fmt: skip
+    elif report.final_regularisation > 0:
+        say(f"  stabilising spring released to c = {report.final_regularisation:.3g} Pa/m "
+            f"(from {built.regularisation.c0:.3g}); its last weakening changed the pressure by "
+            f"{effect:.2%}, below the {RELEASE_TOLERANCE:.0%} tolerance")  # fmt: skip
     else:
-        say(f"  releasing the stabilising spring changed the pressure by "
-            f"{report.regularisation_effect:.2%} in its last stage")  # fmt: skip
+        say(f"  stabilising spring fully released; its last stage changed the pressure by "
+            f"{effect:.2%}")  # fmt: skip
     if completed:
         frames.write()
 
