@@ -52,7 +52,7 @@ def attach(fine: list[dict], coarse: list[dict], rate: float = RATE) -> list[dic
         for s in STATS:
             err = richardson_error(r[f"{s}_kPa"], c[f"{s}_kPa"], rate) if c else float("nan")
             row[f"{s}_err_kPa"] = err
-            row[f"{s}_err_mmHg"] = units.pa_to_mmhg(units.kpa_to_pa(err))
+            row[f"{s}_err_mmHg"] = units.pa_to_mmhg(1e3 * err)
         row["comfort_range"] = comfort_range(r["p95_kPa"], row["p95_err_kPa"]) if c else ""
         rows.append(row)
     return rows
