@@ -342,6 +342,14 @@ class NonlinearSolver:
         snes.setTolerances(atol=atol)
         return atol
 
+    def set_line_search(self, kind: str) -> str:
+        """SNES line search of the following solves ("basic", "l2", "bt", …); returns the
+        previous one."""
+        ls = self.problem.solver.getLineSearch()
+        previous = ls.getType()
+        ls.setType(kind)
+        return previous
+
     def set_max_it(self, max_it: int) -> int:
         """Newton iteration limit of the following solves; returns the previous limit."""
         snes = self.problem.solver
