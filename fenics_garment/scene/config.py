@@ -286,7 +286,9 @@ def _check(s: Scene) -> None:
     _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
     needs = GARMENT_BODY.get(g.kind, "mannequin or scan")
     ok = b.kind == needs if g.kind in GARMENT_BODY else b.kind in ("mannequin", "scan")
-    _require(ok, src, "garment.kind", f"a {g.kind} needs a {needs} body (body.kind = {b.kind!r})")
+    an = "an" if needs[0] in "aeiou" else "a"
+    msg = f"a {g.kind} needs {an} {needs} body (body.kind = {b.kind!r})"
+    _require(ok, src, "garment.kind", msg)
     if g.kind == "stocking":
         _one_of(g.side, SIDES, src, "garment.side")
         _require(b.kind != "mannequin" or b.legs, src, "body.legs",
