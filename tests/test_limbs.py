@@ -88,6 +88,7 @@ def sleeve_run():
     return run(config.load(DEMOS / "sleeve_on_arm.toml"), _tmp(), quiet=True)
 
 
+@pytest.mark.slow  # 29 s of CPU; 50 s wall at load 3.5, 97 s at load 7 on the shared 2 cores
 def test_sleeve_obeys_laplace_per_level(sleeve_run):
     assert sleeve_run.completed and sleeve_run.report.final_regularisation == 0.0
     checks = {c.level: c for c in cp.level_checks(sleeve_run.built, list(ARM_GIRTHS), 0.01)}
