@@ -1,4 +1,4 @@
-"""Garments cut from a body: gilet, one-piece dress, tube/sleeve and compression stocking.
+"""Garments cut from a body: gilet, one-piece dress, tube, arm sleeve and compression stocking.
 
 Construction (the garment mesh is the shell's **stress-free reference configuration**):
 
@@ -695,6 +695,34 @@ def make_stocking(
     return _finish(
         "stocking", comm, lambda g: _build(g, "stocking", levels, [], cls, h, quads), table
     )
+
+
+SLEEVE_EASE = {"wrist": -0.07, "forearm": -0.065, "elbow": -0.06, "upper_arm": -0.055}
+
+
+def make_sleeve(
+    body: BodySurface,
+    ease: float | dict[str, float] = SLEEVE_EASE,
+    h: float = 0.01,
+    min_clearance: float | None = None,
+    end: float = 0.025,
+    quads: bool = False,
+    comm: Any | None = None,
+) -> GarmentSurface:
+    """A compression sleeve on an arm from :func:`~.mannequin.make_arm`, from ``end`` below the
+    wrist (edge ``hem``) to ``end`` above the upper-arm level (edge ``top``), ease per level.
+
+    The end sections repeat the wrist's and the upper arm's (the arm's stubs are prismatic), so
+    the levels themselves lie ``end`` away from the free edges. Default ease (−7 % wrist …
+    −5.5 % upper arm) is our illustrative graduation, not a compression class.
+    """
+    e = _ease_dict(ease, SLEEVE_EASE)
+    z_w, z_u = body.landmarks["wrist"], body.landmarks["upper_arm"]
+    extra = {"hem": (z_w - end, "wrist", 0.0), "top": (z_u + end, "upper_arm", 0.0)}
+    names = ["hem", "wrist", "forearm", "elbow", "upper_arm", "top"]
+    levels, table = _levels_from(body, names, e, min_clearance, extra)
+    cls = _TubeClassifier(levels["hem"][0], levels["top"][0])
+    return _finish("sleeve", comm, lambda g: _build(g, "sleeve", levels, [], cls, h, quads), table)
 
 
 def make_tube(

@@ -226,3 +226,78 @@ def _surface_arrays(g, order: int) -> tuple[np.ndarray, np.ndarray]:
     vertices = coords.reshape(-1, 3)
     used, inv = np.unique(conn.ravel(), return_inverse=True)
     return vertices[used], inv.reshape(conn.shape).astype(np.int64)
+
+
+# ------------------------------------------------------------------------------------------------
+# An arm on its own (a body for sleeves): vertical, wrist at z = 0, upper arm on top.
+# ------------------------------------------------------------------------------------------------
+
+#: Levels of the arm, wrist to upper arm.
+ARM_LEVELS = ("wrist", "forearm", "elbow", "upper_arm")
+#: Default arm girths [m]: **our own round-number proportions** for the size-88 woman of
+#: :mod:`.measurements` (the ASTM D5585 rows transcribed there are torso girths only; no arm
+#: girth table was at hand), in the range of an adult woman's wrist (~15–16 cm), forearm, elbow
+#: and biceps (~26–28 cm) tape girths. Pass measured values to :func:`make_arm` for a wearer.
+ARM_GIRTHS = {"wrist": 0.155, "forearm": 0.215, "elbow": 0.235, "upper_arm": 0.27}
+#: Distance of each level above the wrist [m] (our estimate: forearm 24 cm, the upper-arm girth
+#: taken 12 cm above the elbow).
+ARM_HEIGHTS = {"wrist": 0.0, "forearm": 0.12, "elbow": 0.24, "upper_arm": 0.36}
+#: Depth / width of each section (mildly elliptic, the wrist flattest): our estimates.
+ARM_ASPECT = {"wrist": 0.8, "forearm": 0.9, "elbow": 0.92, "upper_arm": 0.92}
+#: Region numbers of the arm's bands (own numbering, after the torso/leg regions' 1–15).
+ARM_REGIONS = {"wrist": 21, "forearm": 22, "elbow": 23, "upper_arm": 24}
+
+
+def arm_sections(
+    girths: dict[str, float] | None = None,
+    aspect: dict[str, float] | None = None,
+    stub: float = 0.05,
+) -> dict[str, tuple[float, np.ndarray]]:
+    """Height and (x, y) ellipse of every arm level, each scaled to its girth, plus a
+    ``hand`` section ``stub`` below the wrist and a ``shoulder`` one ``stub`` above the upper
+    arm that repeat their neighbours (so a sleeve can end short of the body's flat caps)."""
+    g = {**ARM_GIRTHS, **(girths or {})}
+    asp = {**ARM_ASPECT, **(aspect or {})}
+    unknown = set(g) - set(ARM_LEVELS)
+    if unknown:
+        raise ValueError(f"unknown arm level(s) {sorted(unknown)}; known: {ARM_LEVELS}")
+    if any(v <= 0 for v in g.values()) or any(not 0.3 <= v <= 1.0 for v in asp.values()):
+        raise ValueError("arm girths must be positive and aspect ratios in [0.3, 1]")
+    out: dict[str, tuple[float, np.ndarray]] = {}
+    for level in ARM_LEVELS:
+        shape = SectionShape(1.0, asp[level], asp[level], 2.0)
+        out[level] = (ARM_HEIGHTS[level], shape.points(720, shape.scale_for_girth(g[level])))
+    hand = (ARM_HEIGHTS["wrist"] - stub, out["wrist"][1])
+    top = (ARM_HEIGHTS["upper_arm"] + stub, out["upper_arm"][1])
+    return {"hand": hand, **out, "shoulder": top}
+
+
+def make_arm(
+    girths: dict[str, float] | None = None,
+    h: float = 0.008,
+    aspect: dict[str, float] | None = None,
+) -> BodySurface:
+    """A closed arm (OCC loft through :func:`arm_sections`, flat caps), outward, with regions
+    ``wrist``/``forearm``/``elbow``/``upper_arm`` (bands split half-way between levels).
+
+    The arm hangs straight (axis z): a sleeve's sections are then horizontal like every other
+    garment's. Element size ``h`` [m], capped by 24 elements per turn (:class:`MeshSizes`).
+    """
+    secs = arm_sections(girths, aspect)
+    with gmsh_session(name="arm") as g:
+        add_loft(g, secs)
+        g.model.occ.synchronize()
+        _size_field(g, MeshSizes(coarse=h, fine=h))
+        g.option.setNumber("Mesh.Algorithm", 6)
+        g.model.mesh.generate(2)
+        vertices, triangles = _surface_arrays(g, 1)
+    from .surface import orient_outward
+
+    tri = orient_outward(vertices, triangles)
+    zs = np.array([secs[k][0] for k in ARM_LEVELS])
+    cuts = 0.5 * (zs[1:] + zs[:-1])
+    zc = vertices[tri].mean(axis=1)[:, 2]
+    region = np.array([ARM_REGIONS[k] for k in ARM_LEVELS], np.int32)[np.searchsorted(cuts, zc)]
+    landmarks = {k: secs[k][0] for k in ARM_LEVELS}
+    sections = {k: secs[k][1] for k in ARM_LEVELS}
+    return BodySurface(vertices, tri, region, dict(ARM_REGIONS), landmarks, sections)

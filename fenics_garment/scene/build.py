@@ -36,6 +36,11 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
     if comm.rank == 0:
         if b.kind == "cylinder":
             body = gm.cylinder_body(b.radius, b.length, h=b.mesh_size)
+        elif b.kind == "arm":
+            from fenics_garment.geometry.mannequin import make_arm
+
+            girths = {k.removesuffix("_girth"): v for k, v in b.measurements.items()}
+            body = make_arm(girths, h=b.mesh_size)
         elif b.kind == "scan":
             from fenics_garment.geometry.scan import load_scan
 
@@ -66,6 +71,8 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
         return gm.make_dress(body, **kw)
     if g.kind == "stocking":
         return gm.make_stocking(body, side=g.side, **kw)
+    if g.kind == "sleeve":
+        return gm.make_sleeve(body, **kw)
     return gm.make_tube(body, **kw)
 
 

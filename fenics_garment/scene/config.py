@@ -5,10 +5,10 @@ thickness fails at once, naming the file and the key, instead of deep inside a N
 
     name = "cotton-gilet"
     [body]
-    kind = "mannequin"          # mannequin | scan | cylinder
+    kind = "mannequin"          # mannequin | scan | cylinder | arm
     size = "88"                 # EN 13402-3 size code; [body.measurements] overrides girths
     [garment]
-    kind = "gilet"              # gilet | dress | tube | stocking
+    kind = "gilet"              # gilet | dress | tube | stocking | sleeve
     fabric = "cotton"           # built-in fabric; [garment.fabric_overrides] replaces fields
     ease = { waist = -0.04 }    # fraction of the body girth per level (or one number)
     [physics]
@@ -49,7 +49,13 @@ class SceneError(ValueError):
 
 @dataclass(frozen=True)
 class BodyConfig:
-    """The body: a parametric mannequin, a scan file, or an analytic cylinder (test rig, arm)."""
+    """The body: a parametric mannequin, a scan file, an analytic cylinder (test rig), or an arm.
+
+    ``kind = "arm"``: a straight arm lofted through the wrist, forearm, elbow and upper-arm
+    sections (:func:`~fenics_garment.geometry.mannequin.make_arm`); ``measurements`` then takes
+    ``wrist_girth``, ``forearm_girth``, ``elbow_girth``, ``upper_arm_girth`` [m], and
+    ``z_range`` is not used (the arm has its own frame, wrist at z = 0).
+    """
 
     kind: str = "mannequin"
     size: str = "88"  # mannequin size code (bust girth in cm)
@@ -139,8 +145,16 @@ class Scene:
     source: str = field(default="", compare=False)  # the file it came from (not a TOML key)
 
 
-BODY_KINDS = ("mannequin", "scan", "cylinder")
-GARMENT_KINDS = ("gilet", "dress", "tube", "stocking")
+BODY_KINDS = ("mannequin", "scan", "cylinder", "arm")
+GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
+#: The body kind each garment kind needs (the rest need a mannequin or a scan).
+GARMENT_BODY = {"tube": "cylinder", "sleeve": "arm"}
+#: Levels that a per-level ease may name, per garment kind (others are not checked).
+EASE_LEVELS = {
+    "sleeve": ("wrist", "forearm", "elbow", "upper_arm"),
+    "stocking": ("ankle", "calf", "knee", "thigh"),
+}
+SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 ELEMENTS = ("P2B-P2", "P2-P2", "P1-P1")
 
@@ -241,6 +255,7 @@ def _one_of(value: str, allowed: tuple[str, ...], src: str, key: str) -> None:
 
 
 def _check(s: Scene) -> None:
+    from fenics_garment.geometry.mannequin import ARM_LEVELS
     from fenics_garment.geometry.measurements import SIZE_CODES, Measurements
     from fenics_garment.materials import FABRICS
 
@@ -250,6 +265,12 @@ def _check(s: Scene) -> None:
     if b.kind == "mannequin":
         _one_of(b.size, SIZE_CODES, src, "body.size")
         known = [f.name for f in fields(Measurements)]
+        for k, v in b.measurements.items():
+            if k not in known:
+                raise _unknown(k, known, "body.measurements", src)
+            _require(v > 0, src, f"body.measurements.{k}", f"must be positive, got {v}")
+    if b.kind == "arm":
+        known = [f"{k}_girth" for k in ARM_LEVELS]
         for k, v in b.measurements.items():
             if k not in known:
                 raise _unknown(k, known, "body.measurements", src)
@@ -264,9 +285,19 @@ def _check(s: Scene) -> None:
         v = getattr(b, key)
         _require(v > 0, src, f"body.{key}", f"must be positive, got {v}")
     _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
-    _require((b.kind == "cylinder") == (g.kind == "tube"), src, "garment.kind",
-             f"a {g.kind} needs a {'cylinder' if g.kind == 'tube' else 'mannequin or scan'} "
-             f"body (body.kind = {b.kind!r})")  # fmt: skip
+    needs = GARMENT_BODY.get(g.kind, "mannequin or scan")
+    ok = b.kind == needs if g.kind in GARMENT_BODY else b.kind in ("mannequin", "scan")
+    an = "an" if needs[0] in "aeiou" else "a"
+    msg = f"a {g.kind} needs {an} {needs} body (body.kind = {b.kind!r})"
+    _require(ok, src, "garment.kind", msg)
+    if g.kind == "stocking":
+        _one_of(g.side, SIDES, src, "garment.side")
+        _require(b.kind != "mannequin" or b.legs, src, "body.legs",
+                 "a stocking on a mannequin needs legs = true")  # fmt: skip
+    if isinstance(g.ease, dict) and g.kind in EASE_LEVELS:
+        for k in g.ease:
+            if k not in EASE_LEVELS[g.kind]:
+                raise _unknown(k, list(EASE_LEVELS[g.kind]), "garment.ease", src)
     _one_of(g.fabric, tuple(FABRICS), src, "garment.fabric")
     _one_of(g.element, ELEMENTS, src, "garment.element")
     _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
