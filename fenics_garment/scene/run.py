@@ -4,7 +4,8 @@ One output folder per run, ``<output.folder>/<name>/``:
 
 * ``scene_used.toml`` — the scene with every default filled in;
 * ``dressing.bp`` — VTX (ParaView) time series, one frame per converged dressing step:
-  displacement and contact pressure on the garment (P2 fields);
+  displacement, rotation vector, contact pressure, largest principal membrane strain and the
+  membrane stress resultants N_warp, N_weft, N_shear on the garment (P2 fields);
 * ``final_state.xdmf`` — final displacement, contact pressure [Pa] and largest principal
   membrane strain at the garment's nodes (one time step: ``meshio.xdmf.TimeSeriesReader``);
 * ``body_pressure.vtu`` — the body surface with the pressure at its vertices [Pa] and regions;
@@ -35,6 +36,7 @@ from fenics_garment.scene.dressing import (
     DressStep,
     dress,
 )
+from fenics_garment.shell.energy import membrane_forces
 from fenics_garment.solve import NonlinearSolver
 
 #: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
@@ -66,21 +68,45 @@ def _membrane_strain(model) -> dolfinx.fem.Function:
     return f
 
 
+def _membrane_fields(model) -> ufl.core.expr.Expr:
+    """(largest principal membrane strain, N_warp, N_weft, N_shear [N/m]) as one UFL vector:
+    one compiled Expression for the four output fields."""
+    kin = model.kinematics()
+    eps = kin.membrane
+    a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
+    e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
+    N = membrane_forces(kin, model.C)
+    return ufl.as_vector([e_max, N[0, 0], N[1, 1], N[0, 1]])
+
+
+MEMBRANE_FIELDS = ("membrane_strain_max", "N_warp", "N_weft", "N_shear")
+
+
 class _Frames:
-    """The VTX time series: displacement and pressure (P2) at every converged step."""
+    """The VTX time series at every converged step, all in P2: displacement, rotation vector,
+    contact pressure [Pa], largest principal membrane strain and the membrane stress resultants
+    N_warp, N_weft, N_shear [N/m] in the fabric's (warp, weft) frame."""
 
     def __init__(self, built, folder: Path, enabled: bool):
         self.built, self.enabled = built, enabled
-        mesh = built.model.geometry.mesh
-        self.disp = built.model.displacement()
+        model = built.model
+        mesh = model.geometry.mesh
+        self.disp = model.displacement()
+        V2v = self.disp.function_space
+        self.rot = dolfinx.fem.Function(V2v, name="rotation")
         V2 = dolfinx.fem.functionspace(mesh, ("Lagrange", 2))
         self.p = dolfinx.fem.Function(V2, name="contact_pressure")
+        self.scalars = [dolfinx.fem.Function(V2, name=n) for n in MEMBRANE_FIELDS]
         self.path = folder / "dressing.bp"
         self.tmp = folder / ".dressing.bp.part"
         self.writer = None
         if enabled:
+            V4 = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (len(MEMBRANE_FIELDS),)))
+            self.packed = dolfinx.fem.Function(V4)
+            self.expr = dolfinx.fem.Expression(_membrane_fields(model),
+                                               V4.element.interpolation_points)  # fmt: skip
             self.writer = dolfinx.io.VTXWriter(
-                mesh.comm, self.tmp, [self.disp, self.p], engine="BP4"
+                mesh.comm, self.tmp, [self.disp, self.rot, self.p, *self.scalars], engine="BP4"
             )
         self.k = 0
 
@@ -89,7 +115,12 @@ class _Frames:
             return
         m = self.built.model
         self.disp.interpolate(m.q.sub(0).collapse())
+        self.rot.interpolate(m.q.sub(1).collapse())
         self.p.interpolate(self.built.contact.pressure())
+        self.packed.interpolate(self.expr)
+        n = len(self.scalars)
+        for k, f in enumerate(self.scalars):  # same P2 nodes: the blocked space's k-th component
+            f.x.array[:] = self.packed.x.array[k::n]
         self.writer.write(float(self.k))
         self.k += 1
 

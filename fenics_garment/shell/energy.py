@@ -74,6 +74,13 @@ def membrane_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.exp
     return _orthotropic_quadratic(kin.membrane, C.A11, C.A22, C.A12, C.A66)
 
 
+def membrane_forces(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+    """N = ∂ψ_m/∂ε [N/m]: the membrane stress resultants (2×2, warp/weft frame) of
+    :func:`membrane_energy` — derived from it, so a replaced energy gives its own forces."""
+    eps = ufl.variable(kin.membrane)
+    return ufl.diff(_orthotropic_quadratic(eps, C.A11, C.A22, C.A12, C.A66), eps)
+
+
 def bending_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
     """ψ_b = ½ κ : D : κ, with the measured (not t³-derived) bending rigidities."""
     return _orthotropic_quadratic(kin.bending, C.D11, C.D22, C.D12, C.D66)
