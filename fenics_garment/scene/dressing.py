@@ -104,6 +104,39 @@ def _max_pressure_change(contact, before: np.ndarray, comm: MPI.Comm) -> float:
     return d / top if top > 0 else 0.0
 
 
+@dataclass
+class Progress:
+    """Where a dressing is: enough, with the model's arrays, to continue it (``checkpoint``).
+
+    ``stage`` is ``"grow"`` (the body grows from ``shrink`` in steps of ``step``), ``"release"``
+    (s = 0; the spring stages ``stages`` are still to do, after ``retries`` retries) or ``"done"``
+    (every solve converged; only the outputs are left). ``c`` is the spring constant and ``mu``
+    the scene's friction coefficient (off while the body grows).
+    """
+
+    report: DressReport
+    stage: str = "grow"
+    shrink: float = 0.0
+    step: float = 0.0
+    stages: list[float] = field(default_factory=list)
+    retries: int = 0
+    c: float = 0.0
+    mu: float = 0.0
+
+    def as_dict(self) -> dict:
+        r = self.report
+        rep = {**r.__dict__, "steps": [s.__dict__ for s in r.steps],
+               "failures": [list(f) for f in r.failures]}  # fmt: skip
+        return {**self.__dict__, "report": rep}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Progress:
+        r = dict(d["report"])
+        r["steps"] = [DressStep(**s) for s in r["steps"]]
+        r["failures"] = [tuple(f) for f in r["failures"]]
+        return cls(**{**d, "report": DressReport(**r)})
+
+
 def dress(
     built,
     solver: NonlinearSolver,
@@ -118,6 +151,8 @@ def dress(
     on_failure: Callable[[float, int, int], None] | None = None,
     augmented_lagrangian: tuple[float, int] | None = None,
     friction_while_dressing: bool = False,
+    on_checkpoint: Callable[[Progress], None] | None = None,
+    resume: Progress | None = None,
 ) -> DressReport:
     """Grow the body from s₀ back to 0 (see module doc); returns the :class:`DressReport`.
 
@@ -133,28 +168,39 @@ def dress(
             dressing path is artificial anyway (the body grows; nobody pulls the garment on).
             Friction is switched on at s = 0, where the slip since the last step is zero, so it
             holds the garment where it was put (against gravity) for the final solves.
+        on_checkpoint: called with the :class:`Progress` after every converged solve (the model
+            then holds the converged state), e.g. to write a checkpoint.
+        resume: continue from this progress; the caller has put the model's arrays back
+            (``checkpoint.restore``). The same steps follow as in the uninterrupted run.
     """
     model, contact, reg = built.model, built.contact, built.regularisation
     st = contact.state
     comm = model.geometry.mesh.comm
     q = model.q
-    rep = DressReport()
-    rep.penetration0 = initial_penetration(contact)
-    s0 = max(rep.penetration0, 0.0) + margin
-    rep.shrink0 = s0
-    s = s0
-    ds = s0 / steps if first_step is None else first_step * s0
-    st.shrink.value = s
-    reg.c.value = reg.c0
-    reg.accept_step(q)
-    st.refresh()
-    st.accept_step()
     mu = built.mu
-    mu_value = float(mu.value) if mu is not None else 0.0
-    if mu is not None and not friction_while_dressing:
+    if resume is None:
+        rep = DressReport()
+        rep.penetration0 = initial_penetration(contact)
+        s0 = max(rep.penetration0, 0.0) + margin
+        rep.shrink0 = s0
+        ds = s0 / steps if first_step is None else first_step * s0
+        pr = Progress(rep, "grow", s0, ds, c=reg.c0, mu=float(mu.value) if mu is not None else 0.0)
+        st.shrink.value = s0
+        reg.c.value = reg.c0
+        reg.accept_step(q)
+        st.refresh()
+        st.accept_step()
+    else:
+        pr, rep = resume, resume.report
+        st.shrink.value = pr.shrink
+        reg.c.value = pr.c
+        st.refresh()
+    s0 = rep.shrink0
+    if mu is not None and not friction_while_dressing and pr.stage == "grow":
         mu.value = 0.0
     cuts = 0
-    while s > 0.0:
+    while pr.stage == "grow" and pr.shrink > 0.0:
+        s, ds = pr.shrink, pr.step
         target = max(s - ds, 0.0)
         if target < 1e-3 * s0:  # do not leave a sliver of a step at the end
             target = 0.0
@@ -163,15 +209,16 @@ def dress(
         t0 = time.perf_counter()
         its, reason = solver.solve()
         if reason > 0:
-            s = target
-            rec = DressStep(s, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
+            rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
             st.accept_step()
             reg.accept_step(q)
+            cuts = 0
+            pr.shrink, pr.step = target, ds * grow if its <= grow_below else ds
             if on_step:
                 on_step(rec)
-            cuts = 0
-            ds = ds * grow if its <= grow_below else ds
+            if on_checkpoint:
+                on_checkpoint(pr)
             continue
         # failed: restore the last converged state and halve the step
         q.x.array[:] = q_conv
@@ -182,7 +229,7 @@ def dress(
         if on_failure:
             on_failure(target, its, reason)
         cuts += 1
-        ds /= 2
+        pr.step = ds / 2
         if cuts > max_cuts:
             raise DressingFailed(
                 rep, s,
@@ -191,45 +238,59 @@ def dress(
                 f"after {its} iterations); the last converged state (shrink {s * 1e3:.3f} mm) "
                 "is kept",
             )  # fmt: skip
-    if mu is not None:
-        mu.value = mu_value  # friction on: the garment sticks where it was put (slip = 0)
-    _release(rep, built, solver, comm)
-    if augmented_lagrangian is not None:
-        tol, max_updates = augmented_lagrangian
-        al = uzawa.augmented_lagrangian(
-            st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
-        )
-        rep.al_updates = len(al.penetration) - 1
-        rep.al_penetration = al.penetration
-        if not al.converged:
-            raise DressingFailed(
-                rep, 0.0,
-                f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
-                f"after {max_updates} multiplier updates",
-            )  # fmt: skip
-        st.accept_step()
-    rep.completed = True
+    if pr.stage == "grow":
+        if mu is not None:
+            mu.value = pr.mu  # friction on: the garment sticks where it was put (slip = 0)
+        pr.stage = "release"
+        pr.stages = [] if reg.c0 == 0.0 else [f * reg.c0 for f in (0.1, 0.01, 1e-3, 1e-4, 0.0)]
+        if reg.c0 == 0.0:
+            rep.regularisation_effect = 0.0
+        else:
+            rep.final_regularisation = float(reg.c.value)
+    elif mu is not None:
+        mu.value = pr.mu
+    if pr.stage == "release":
+        _release(pr, built, solver, comm, on_checkpoint)
+        if augmented_lagrangian is not None:
+            tol, max_updates = augmented_lagrangian
+            al = uzawa.augmented_lagrangian(
+                st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
+            )
+            rep.al_updates = len(al.penetration) - 1
+            rep.al_penetration = al.penetration
+            if not al.converged:
+                raise DressingFailed(
+                    rep, 0.0,
+                    f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
+                    f"after {max_updates} multiplier updates",
+                )  # fmt: skip
+            st.accept_step()
+        rep.completed = True
+        pr.stage = "done"
+        if on_checkpoint:
+            on_checkpoint(pr)
     return rep
 
 
-def _release(rep: DressReport, built, solver: NonlinearSolver, comm: MPI.Comm) -> None:
+def _release(
+    pr: Progress,
+    built,
+    solver: NonlinearSolver,
+    comm: MPI.Comm,
+    on_checkpoint: Callable[[Progress], None] | None = None,
+) -> None:
     """Final solves at s = 0 with the spring released in stages c₀/10 … c₀/10⁴, then 0.
 
     The answer is the c = 0 state; the pressure change of the last stage is reported as the
     regularisation's effect. A stage that fails is undone and retried from half-way (in log c),
     up to three times; then the previous state, with its c, is kept and reported
     (``final_regularisation`` > 0; the effect is then that of the last stage that converged, NaN
-    if none did: the answer still carries the spring).
+    if none did: the answer still carries the spring). ``pr.stages`` holds the stages to go.
     """
     model, contact, reg = built.model, built.contact, built.regularisation
-    if reg.c0 == 0.0:
-        rep.regularisation_effect = 0.0
-        return
-    rep.final_regularisation = float(reg.c.value)
-    stages = [0.1 * reg.c0, 0.01 * reg.c0, 1e-3 * reg.c0, 1e-4 * reg.c0, 0.0]
-    retries = 0
-    while stages:
-        c = stages.pop(0)
+    rep = pr.report
+    while pr.stages:
+        c = pr.stages.pop(0)
         before = contact.pressure_values()
         q_conv = model.q.x.array.copy()
         c_prev = float(reg.c.value)
@@ -241,14 +302,18 @@ def _release(rep: DressReport, built, solver: NonlinearSolver, comm: MPI.Comm) -
             model.q.x.scatter_forward()
             reg.c.value = c_prev
             contact.state.refresh()
-            if retries == 3 or c_prev == 0.0:
+            if pr.retries == 3 or c_prev == 0.0:
+                pr.stages = []
                 return
-            retries += 1
+            pr.retries += 1
             mid = (c_prev * max(c, 1e-5 * reg.c0)) ** 0.5  # half-way in log c
-            stages = [mid, c, *stages]
+            pr.stages = [mid, c, *pr.stages]
             continue
         rep.steps.append(DressStep(0.0, its, reason, 0, 0.0, c))
         rep.final_regularisation = c
         rep.regularisation_effect = _max_pressure_change(contact, before, comm)
         built.contact.state.accept_step()
         reg.accept_step(model.q)
+        pr.c = c
+        if on_checkpoint:
+            on_checkpoint(pr)
