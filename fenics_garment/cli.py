@@ -135,6 +135,7 @@ def _check(scene) -> int:
     from fenics_garment.scene import build, preflight
 
     comm = MPI.COMM_WORLD
+    preflight.scene_limits(scene)
     built = build.build(scene, comm)
     pen = preflight.check_built(built)
     r, where = preflight.smallest_body_radius(built)

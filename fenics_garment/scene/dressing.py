@@ -204,6 +204,9 @@ def dress(
         target = max(s - ds, 0.0)
         if target < 1e-3 * s0:  # do not leave a sliver of a step at the end
             target = 0.0
+        if target == s:  # the step is below round-off: no progress is possible
+            raise DressingFailed(rep, s, f"dressing stopped: the step {ds:.3g} m is below "
+                                 f"round-off at shrink {s * 1e3:.3f} mm")  # fmt: skip
         q_conv = q.x.array.copy()
         st.shrink.value = target
         t0 = time.perf_counter()

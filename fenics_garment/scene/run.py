@@ -181,6 +181,7 @@ def run(
     if resume is not None:
         folder = Path(resume)
         meta = checkpoint.read(folder, scene, comm)
+    preflight.scene_limits(scene)
     preflight.output_folder(folder, comm)
     if comm.rank == 0:
         output.write_text(folder / "scene_used.toml", config.dumps(scene))
