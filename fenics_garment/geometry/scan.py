@@ -43,6 +43,10 @@ def read_polygons(path: str | Path) -> tuple[Array, npt.NDArray[np.int64]]:
     p = Path(path)
     if not p.is_file():
         raise ScanError(f"{p}: no such file", "check the path (relative to the working directory)")
+    if p.suffix.lower() == ".ply":
+        with p.open("rb") as f:  # meshio's PLY reader loops forever on a header cut short
+            if b"end_header" not in f.read(1 << 16):
+                raise ScanError(f"{p}: PLY header without end_header", "is the file truncated?")
     try:
         m = meshio.read(p)
     # meshio raises ReadError, ValueError, IndexError … on broken files; its STL reader even

@@ -104,9 +104,9 @@ def scene_limits(scene) -> None:
                  f"{b.radius:g} m; use body.mesh_size <= {h_max:.3g} m")  # fmt: skip
         area = 2 * math.pi * b.radius * (b.length + 0.1 + b.radius)
     for key, h in (("body.mesh_size", b.mesh_size), ("garment.mesh_size", g.mesh_size)):
-        n = area / (math.sqrt(3) / 4 * h * h)
         h_min = math.sqrt(area / (math.sqrt(3) / 4 * MAX_TRIANGLES))
-        if n > MAX_TRIANGLES:
+        if h < h_min:
+            n = MAX_TRIANGLES * (h_min / h) ** 2 if h > 1e-150 else math.inf
             fail(key, f"= {h:g} m would make about {n:.2g} triangles (at most "
                  f"{MAX_TRIANGLES:.0e}); use mesh_size >= {h_min:.2g} m")  # fmt: skip
         if h > 1.0:
