@@ -147,7 +147,7 @@ def test_petsc_option_petsc_rejects():
 
 
 def test_truncated_binary_stl(tmp_path):
-    # meshio's STL reader called sys.exit(1) on this (found by tests/test_fuzz.py)
+    # (meshio's STL reader even calls sys.exit(1) on some corrupted files: tests/test_fuzz.py)
     p = tmp_path / "cut.stl"
     meshio.write(p, meshio.Mesh(TETRA_V, [("triangle", TETRA_T)]), binary=True)
     p.write_bytes(p.read_bytes()[:-10])
