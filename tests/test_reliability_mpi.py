@@ -42,11 +42,13 @@ def test_one_and_two_ranks_give_the_same_pressure():
     rel = np.abs(p1 - p2).max() / np.abs(p1).max()
     if world.rank == 0:
         print(f"1 vs 2 ranks: max |Δp| / max p = {rel:.2e}")
-    # Measured (small tube, body mesh 1 cm): 4.7285e-5 with snes_rtol 1e-8, 1e-12, and 1e-12 with
-    # snes_atol 1e-11 / stol 1e-14 alike, with the same steps and Newton iterations on 1 and 2
-    # ranks; the garment positions differ by 1.7e-7 m. Independent of the tolerance, so not
-    # Newton's round-off floor: some term depends on the partition (open; see
-    # notes/bad_inputs.md). The target 1e-8 is not reached; this guards the present state.
+    # Measured (small tube, body mesh 1 cm): 4.7285e-5 with snes_rtol 1e-8, 1e-12, with
+    # snes_atol 1e-11 / stol 1e-14, and with the solver's floor-raised atol switched off, alike to
+    # 9 digits, with the same steps and Newton iterations on 1 and 2 ranks. The garment positions
+    # differ by up to 1.7e-7 m (largest at the free bottom edge, not a rigid motion); the inputs
+    # (director 5e-16, warp 5e-11, κ, c₀, h_max equal) do not explain it. Not Newton's round-off
+    # floor: some term of the solve depends on the partition (open). The target 1e-8 is not
+    # reached; this guards the present state.
     assert rel < 1e-4
 
 
