@@ -42,14 +42,12 @@ def test_one_and_two_ranks_give_the_same_pressure():
     rel = np.abs(p1 - p2).max() / np.abs(p1).max()
     if world.rank == 0:
         print(f"1 vs 2 ranks: max |Δp| / max p = {rel:.2e}")
-    # Measured (small tube, body mesh 1 cm): 4.7285e-5 with snes_rtol 1e-8, 1e-12, with
-    # snes_atol 1e-11 / stol 1e-14, and with the solver's floor-raised atol switched off, alike to
-    # 9 digits, with the same steps and Newton iterations on 1 and 2 ranks. The garment positions
-    # differ by up to 1.7e-7 m (largest at the free bottom edge, not a rigid motion); the inputs
-    # (director 5e-16, warp 5e-11, κ, c₀, h_max equal) do not explain it. Not Newton's round-off
-    # floor: some term of the solve depends on the partition (open). The target 1e-8 is not
-    # reached; this guards the present state.
-    assert rel < 1e-4
+    # Measured (small tube, body mesh 1 cm): 4.5e-13 (4.0e-13 with the default snes_rtol 1e-8).
+    # Before the warp field
+    # was interpolated from the replicated gmsh-order nodes (geometry.garments._vector_function)
+    # it was 4.7e-5 at any tolerance: each rank took the 3 nearest of its own nodes, so P2 dofs
+    # near the partition boundary (and distance ties) got another warp on 1 and on 2 ranks.
+    assert rel < 1e-8
 
 
 def test_more_ranks_than_cells_is_refused():
