@@ -1,4 +1,4 @@
-"""The ``fenics-garment`` command line: ``info``, ``demo`` and ``run SCENE.toml``.
+"""The ``fenics-garment`` command line: ``info``, ``demo``, ``run SCENE.toml`` and ``check``.
 
 ``main(argv) -> int`` is the whole program so that tests call it directly. Messages are printed
 on rank 0 only; every rank runs the same commands so the program works under ``mpiexec -n N``.
@@ -76,23 +76,84 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return demos.REGISTRY[name].run(Path(args.output), quiet=args.quiet)
 
 
+#: Errors of the user's input: a one-line message and exit code 2 (no traceback).
+def _input_errors() -> tuple[type[Exception], ...]:
+    from fenics_garment.geometry.errors import GeometryError, ScanError
+    from fenics_garment.materials import MaterialError
+    from fenics_garment.scene.checkpoint import ResumeError
+    from fenics_garment.scene.config import SceneError
+    from fenics_garment.scene.preflight import PreflightError
+
+    return (SceneError, ScanError, MaterialError, PreflightError, ResumeError, GeometryError)
+
+
+def _error(message: str) -> int:
+    from fenics_garment._stack import MPI
+
+    if MPI.COMM_WORLD.rank == 0:
+        print(f"error: {message}", file=sys.stderr)
+    return 2
+
+
+def _load_scene(args: argparse.Namespace):
+    """The scene of ``run``: SCENE, or the resumed folder's scene_used.toml."""
+    from fenics_garment.scene import config
+
+    if args.scene is None and args.resume is None:
+        raise config.SceneError("", "", "give a scene file, or --resume FOLDER")
+    if args.scene is None:
+        used = Path(args.resume) / "scene_used.toml"
+        if not used.is_file():
+            raise config.SceneError(str(used), "", "no such file: is the folder the output "
+                                    "folder of a run (<output root>/<scene name>/)?")  # fmt: skip
+        return config.load(used)
+    return config.load(args.scene)
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from fenics_garment._stack import MPI
-    from fenics_garment.scene import config
     from fenics_garment.scene.run import run
 
     try:
-        scene = config.load(args.scene)
-    except config.SceneError as err:
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {err}", file=sys.stderr)
-        return 2
-    result = run(scene, args.output, quiet=args.quiet)
+        scene = _load_scene(args)
+        if args.check:
+            return _check(scene)
+        result = run(scene, args.output, quiet=args.quiet, resume=args.resume,
+                     checkpoints=not args.no_checkpoints)  # fmt: skip
+    except _input_errors() as err:
+        return _error(str(err))
     if not result.completed:
         if MPI.COMM_WORLD.rank == 0:
             print(f"error: {result.message}", file=sys.stderr)
         return 3
     return 0
+
+
+def _check(scene) -> int:
+    """Validate ``scene``, build its body, garment and model and run the pre-solve checks."""
+    from fenics_garment._stack import MPI
+    from fenics_garment.scene import build, preflight
+
+    comm = MPI.COMM_WORLD
+    preflight.scene_limits(scene)
+    built = build.build(scene, comm)
+    pen = preflight.check_built(built)
+    r, where = preflight.smallest_body_radius(built)
+    if comm.rank == 0:
+        print(f"{scene.source or scene.name}: ok — body {len(built.body.triangles)} triangles "
+              f"(smallest radius {r * 1e3:.1f} mm, {where}); garment "
+              f"{len(built.garment.cells)} cells, {built.dofs} dofs on {comm.size} rank(s); "
+              f"initial penetration {max(pen, 0.0) * 1e3:.1f} mm")  # fmt: skip
+    return 0
+
+
+def _cmd_check(args: argparse.Namespace) -> int:
+    from fenics_garment.scene import config
+
+    try:
+        return _check(config.load(args.scene))
+    except _input_errors() as err:
+        return _error(str(err))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -114,13 +175,44 @@ def build_parser() -> argparse.ArgumentParser:
     p_demo.add_argument("-q", "--quiet", action="store_true", help="no progress output")
     p_demo.set_defaults(func=_cmd_demo)
 
-    p_run = sub.add_parser("run", help="dress a garment described by a scene file (TOML)")
-    p_run.add_argument("scene", help="scene file, e.g. demos/cotton_gilet.toml")
+    p_run = sub.add_parser(
+        "run",
+        help="dress a garment described by a scene file (TOML)",
+        description="Dress the garment of SCENE and write <output root>/<scene name>/. After "
+        "every converged dressing step a checkpoint is written to <that folder>/checkpoint/; "
+        "a run that was killed continues with `run --resume <that folder>` (same number of MPI "
+        "ranks), which reads the folder's scene_used.toml and gives the same answer as an "
+        "uninterrupted run. Exit codes: 0 done, 2 bad input (one-line message), 3 the dressing "
+        "did not converge (the outputs of the last converged state are written).",
+    )
+    p_run.add_argument("scene", nargs="?",
+                       help="scene file, e.g. demos/cotton_gilet.toml (optional with --resume: "
+                       "then it must be the scene of the interrupted run)")  # fmt: skip
     p_run.add_argument("-o", "--output", default=None,
                        help="output root (default: the scene's output.folder); "
                        "the run writes <root>/<scene name>/")  # fmt: skip
     p_run.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    p_run.add_argument("--resume", metavar="FOLDER", default=None,
+                       help="continue the interrupted run whose output folder is FOLDER "
+                       "(<root>/<scene name>/) from its last checkpoint")  # fmt: skip
+    p_run.add_argument(
+        "--no-checkpoints",
+        action="store_true",
+        help="do not write checkpoints (a killed run then starts over)",
+    )
+    p_run.add_argument("--check", action="store_true", help="only validate (as `check`)")
     p_run.set_defaults(func=_cmd_run)
+
+    p_check = sub.add_parser(
+        "check",
+        help="validate a scene and build its meshes without solving",
+        description="Validate SCENE, build its body, garment and shell model and run the "
+        "pre-solve checks (body mesh fine enough for its curvature, garment not too deep "
+        "inside the body, every MPI rank owning garment cells). Exit code 0: ok; 2: the "
+        "one-line error says what to change.",
+    )
+    p_check.add_argument("scene", help="scene file")
+    p_check.set_defaults(func=_cmd_check)
     return parser
 
 

@@ -144,3 +144,31 @@ def test_petsc_option_petsc_rejects():
     model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(1, 0, 0)), Isotropic(1e6, 0.3, 1e-2))
     with pytest.raises(ValueError, match=r"PETSc rejected.*no_such_krylov"):
         NonlinearSolver(model, [], petsc_options={"ksp_type": "no_such_krylov"})
+
+
+def test_truncated_binary_stl(tmp_path):
+    # (meshio's STL reader even calls sys.exit(1) on some corrupted files: tests/test_fuzz.py)
+    p = tmp_path / "cut.stl"
+    meshio.write(p, meshio.Mesh(TETRA_V, [("triangle", TETRA_T)]), binary=True)
+    p.write_bytes(p.read_bytes()[:-10])
+    with pytest.raises(ScanError, match=r"cut.stl: not a readable mesh"):
+        load_scan(p)
+
+
+def test_ply_header_cut_short(tmp_path):
+    # meshio's PLY reader loops forever when end_header is missing (found by tests/test_fuzz.py)
+    p = _write(tmp_path / "cut.ply", TETRA_V, TETRA_T)
+    p.write_bytes(p.read_bytes()[:60])
+    with pytest.raises(ScanError, match=r"cut.ply: PLY header without end_header"):
+        load_scan(p)
+
+
+def test_scene_file_not_utf8(tmp_path):
+    from fenics_garment.scene import config
+
+    p = tmp_path / "scene.toml"
+    p.write_bytes(b'name = "a\xff"\n')
+    with pytest.raises(config.SceneError, match=r"scene.toml: not a UTF-8 text file"):
+        config.load(p)
+    with pytest.raises(config.SceneError, match=r"cannot read"):
+        config.load(tmp_path)  # a directory

@@ -134,9 +134,9 @@ class GarmentSurface:
 
         from fenics_garment._stack import dolfinx
 
-        x = self.mesh.geometry.x
-        vals = self.node_values(nodal)
-        nrm = self.node_values(self.normal)
+        # the replicated gmsh-order arrays, not this rank's nodes: the same neighbours (and tie
+        # breaks) on every number of ranks, so the answer does not depend on the partition
+        x, vals, nrm = self.points, np.asarray(nodal), self.normal
         tree = cKDTree(x)
         f = dolfinx.fem.Function(V)
 

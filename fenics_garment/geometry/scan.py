@@ -43,9 +43,15 @@ def read_polygons(path: str | Path) -> tuple[Array, npt.NDArray[np.int64]]:
     p = Path(path)
     if not p.is_file():
         raise ScanError(f"{p}: no such file", "check the path (relative to the working directory)")
+    if p.suffix.lower() == ".ply":
+        with p.open("rb") as f:  # meshio's PLY reader loops forever on a header cut short
+            if b"end_header" not in f.read(1 << 16):
+                raise ScanError(f"{p}: PLY header without end_header", "is the file truncated?")
     try:
         m = meshio.read(p)
-    except Exception as e:  # meshio raises ReadError, ValueError, IndexError … on broken files
+    # meshio raises ReadError, ValueError, IndexError … on broken files; its STL reader even
+    # calls sys.exit(1) on some (found by tests/test_fuzz.py)
+    except (Exception, SystemExit) as e:
         raise ScanError(
             f"{p}: not a readable mesh ({type(e).__name__}: {e})",
             "expected OBJ, PLY, STL, MSH or another meshio format; is the file truncated?",
@@ -217,7 +223,12 @@ def load_scan(
     if remesh:
         v, t = remesh_surface(v, t, remesh)
         t = srf.orient_outward(v, t)
-    marks = locate_landmarks(v, t)
+    try:
+        marks = locate_landmarks(v, t)
+    except ScanError:
+        raise
+    except ValueError as e:  # an empty range of sections (found by tests/test_fuzz.py)
+        raise ScanError(f"{path}: body landmarks not found ({e})", "is it a standing body?") from e
     body = BodySurface(v, t, np.zeros(len(t), np.int32), {}, marks)
     secs = {}
     for k in marks:

@@ -351,6 +351,10 @@ def load(path: str | Path) -> Scene:
         data = tomllib.loads(path.read_text())
     except FileNotFoundError:
         raise SceneError(str(path), "", "no such scene file") from None
+    except UnicodeDecodeError as err:
+        raise SceneError(str(path), "", f"not a UTF-8 text file (byte {err.start})") from None
+    except OSError as err:
+        raise SceneError(str(path), "", f"cannot read: {err.strerror or err}") from None
     except tomllib.TOMLDecodeError as err:
         raise SceneError(str(path), "", f"not valid TOML: {err}") from None
     return from_dict(data, str(path))

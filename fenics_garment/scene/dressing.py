@@ -131,6 +131,41 @@ def _max_pressure_change(contact, before: np.ndarray, comm: MPI.Comm) -> float:
     return d / top if top > 0 else 0.0
 
 
+@dataclass
+class Progress:
+    """Where a dressing is: enough, with the model's arrays, to continue it (``checkpoint``).
+
+    ``stage`` is ``"grow"`` (the body grows from ``shrink`` in steps of ``step``), ``"release"``
+    (s = 0; the spring is released: ``c`` is the next spring constant to try, ``retries`` the
+    failures in a row, ``spring`` the spring force of the last accepted solve, ``solves`` the
+    release solves so far) or ``"done"`` (every solve converged; only the outputs are left).
+    ``mu`` is the scene's friction coefficient (off while the body grows).
+    """
+
+    report: DressReport
+    stage: str = "grow"
+    shrink: float = 0.0
+    step: float = 0.0
+    retries: int = 0
+    c: float = 0.0
+    mu: float = 0.0
+    spring: float = 0.0  # c·max|u − u_prev| of the last accepted release solve [Pa]
+    solves: int = 0
+
+    def as_dict(self) -> dict:
+        r = self.report
+        rep = {**r.__dict__, "steps": [s.__dict__ for s in r.steps],
+               "failures": [list(f) for f in r.failures]}  # fmt: skip
+        return {**self.__dict__, "report": rep}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> Progress:
+        r = dict(d["report"])
+        r["steps"] = [DressStep(**s) for s in r["steps"]]
+        r["failures"] = [tuple(f) for f in r["failures"]]
+        return cls(**{**d, "report": DressReport(**r)})
+
+
 def dress(
     built,
     solver: NonlinearSolver,
@@ -145,6 +180,8 @@ def dress(
     on_failure: Callable[[float, int, int], None] | None = None,
     augmented_lagrangian: tuple[float, int] | None = None,
     friction_while_dressing: bool = False,
+    on_checkpoint: Callable[[Progress], None] | None = None,
+    resume: Progress | None = None,
 ) -> DressReport:
     """Grow the body from s₀ back to 0 (see module doc); returns the :class:`DressReport`.
 
@@ -160,46 +197,62 @@ def dress(
             dressing path is artificial anyway (the body grows; nobody pulls the garment on).
             Friction is switched on at s = 0, where the slip since the last step is zero, so it
             holds the garment where it was put (against gravity) for the final solves.
+        on_checkpoint: called with the :class:`Progress` after every converged solve (the model
+            then holds the converged state), e.g. to write a checkpoint.
+        resume: continue from this progress; the caller has put the model's arrays back
+            (``checkpoint.restore``). The same steps follow as in the uninterrupted run.
     """
     model, contact, reg = built.model, built.contact, built.regularisation
     st = contact.state
     comm = model.geometry.mesh.comm
     q = model.q
-    rep = DressReport()
-    rep.residual_atol = _absolute_tolerance(built, solver)
-    rep.penetration0 = initial_penetration(contact)
-    s0 = max(rep.penetration0, 0.0) + margin
-    rep.shrink0 = s0
-    s = s0
-    ds = s0 / steps if first_step is None else first_step * s0
-    st.shrink.value = s
-    reg.c.value = reg.c0
-    reg.accept_step(q)
-    st.refresh()
-    st.accept_step()
     mu = built.mu
-    mu_value = float(mu.value) if mu is not None else 0.0
-    if mu is not None and not friction_while_dressing:
+    atol = _absolute_tolerance(built, solver)  # deterministic: the same on a resume
+    if resume is None:
+        rep = DressReport()
+        rep.residual_atol = atol
+        rep.penetration0 = initial_penetration(contact)
+        s0 = max(rep.penetration0, 0.0) + margin
+        rep.shrink0 = s0
+        ds = s0 / steps if first_step is None else first_step * s0
+        pr = Progress(rep, "grow", s0, ds, c=reg.c0, mu=float(mu.value) if mu is not None else 0.0)
+        st.shrink.value = s0
+        reg.c.value = reg.c0
+        reg.accept_step(q)
+        st.refresh()
+        st.accept_step()
+    else:
+        pr, rep = resume, resume.report
+        st.shrink.value = pr.shrink
+        reg.c.value = pr.c
+        st.refresh()
+    s0 = rep.shrink0
+    if mu is not None and not friction_while_dressing and pr.stage == "grow":
         mu.value = 0.0
     cuts = 0
-    while s > 0.0:
+    while pr.stage == "grow" and pr.shrink > 0.0:
+        s, ds = pr.shrink, pr.step
         target = max(s - ds, 0.0)
         if target < 1e-3 * s0:  # do not leave a sliver of a step at the end
             target = 0.0
+        if target == s:  # the step is below round-off: no progress is possible
+            raise DressingFailed(rep, s, f"dressing stopped: the step {ds:.3g} m is below "
+                                 f"round-off at shrink {s * 1e3:.3f} mm")  # fmt: skip
         q_conv = q.x.array.copy()
         st.shrink.value = target
         t0 = time.perf_counter()
         its, reason = solver.solve()
         if reason > 0:
-            s = target
-            rec = DressStep(s, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
+            rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
             st.accept_step()
             reg.accept_step(q)
+            cuts = 0
+            pr.shrink, pr.step = target, ds * grow if its <= grow_below else ds
             if on_step:
                 on_step(rec)
-            cuts = 0
-            ds = ds * grow if its <= grow_below else ds
+            if on_checkpoint:
+                on_checkpoint(pr)
             continue
         # failed: restore the last converged state and halve the step
         q.x.array[:] = q_conv
@@ -210,7 +263,7 @@ def dress(
         if on_failure:
             on_failure(target, its, reason)
         cuts += 1
-        ds /= 2
+        pr.step = ds / 2
         if cuts > max_cuts:
             raise DressingFailed(
                 rep, s,
@@ -219,33 +272,47 @@ def dress(
                 f"after {its} iterations); the last converged state (shrink {s * 1e3:.3f} mm) "
                 "is kept",
             )  # fmt: skip
-    if mu is not None:
-        mu.value = mu_value  # friction on: the garment sticks where it was put (slip = 0)
-    _release(rep, built, solver, comm, on_step)
-    if augmented_lagrangian is not None:
-        tol, max_updates = augmented_lagrangian
-        al = uzawa.augmented_lagrangian(
-            st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
-        )
-        rep.al_updates = len(al.penetration) - 1
-        rep.al_penetration = al.penetration
-        if not al.converged:
-            raise DressingFailed(
-                rep, 0.0,
-                f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
-                f"after {max_updates} multiplier updates",
-            )  # fmt: skip
-        st.accept_step()
-    rep.completed = True
+    if pr.stage == "grow":
+        if mu is not None:
+            mu.value = pr.mu  # friction on: the garment sticks where it was put (slip = 0)
+        pr.stage = "release"
+        pr.c = float(reg.c.value)
+        if reg.c0 == 0.0:
+            rep.regularisation_effect = 0.0
+        else:
+            rep.final_regularisation = pr.c
+    elif mu is not None:
+        mu.value = pr.mu
+    if pr.stage == "release":
+        _release(pr, built, solver, comm, on_step, on_checkpoint)
+        if augmented_lagrangian is not None:
+            tol, max_updates = augmented_lagrangian
+            al = uzawa.augmented_lagrangian(
+                st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
+            )
+            rep.al_updates = len(al.penetration) - 1
+            rep.al_penetration = al.penetration
+            if not al.converged:
+                raise DressingFailed(
+                    rep, 0.0,
+                    f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
+                    f"after {max_updates} multiplier updates",
+                )  # fmt: skip
+            st.accept_step()
+        rep.completed = True
+        pr.stage = "done"
+        if on_checkpoint:
+            on_checkpoint(pr)
     return rep
 
 
 def _release(
-    rep: DressReport,
+    pr: Progress,
     built,
     solver: NonlinearSolver,
     comm: MPI.Comm,
     on_step: Callable[[DressStep], None] | None = None,
+    on_checkpoint: Callable[[Progress], None] | None = None,
 ) -> None:
     """Pseudo-transient continuation at s = 0: solve, accept, weaken the spring, until c = 0.
 
@@ -263,29 +330,27 @@ def _release(
     pressure change of that last solve is reported as the regularisation's effect. After
     :data:`MAX_FAILS` failures in a row or :data:`MAX_RELEASE_SOLVES` solves the last converged
     state is kept with its c (``final_regularisation`` > 0) and the effect is that of its last
-    solve.
+    solve. ``pr`` carries the schedule's state (c to try, failures in a row, the last spring
+    force), so a resumed run takes the same solves.
     """
-    reg = built.regularisation
-    if reg.c0 == 0.0:
-        rep.regularisation_effect = 0.0
+    if built.regularisation.c0 == 0.0:
         return
-    c = float(reg.c.value)
-    rep.final_regularisation = c
     max_it = solver.set_max_it(max(RELEASE_MAX_IT, solver.problem.solver.getTolerances()[3]))
     line_search = solver.set_line_search(RELEASE_LINE_SEARCH)
     try:
-        _release_loop(rep, built, solver, comm, on_step, c)
+        _release_loop(pr, built, solver, comm, on_step, on_checkpoint)
     finally:
         solver.set_max_it(max_it)
         solver.set_line_search(line_search)
 
 
-def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
+def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> None:
     model, contact, reg = built.model, built.contact, built.regularisation
+    rep = pr.report
     u_dofs = model.Q.sub(0).collapse()[1]
-    fails = 0
-    spring_prev = math.inf  # c·max|u − u_prev| of the previous accepted solve [Pa]
-    for _ in range(MAX_RELEASE_SOLVES):
+    while pr.solves < MAX_RELEASE_SOLVES:
+        pr.solves += 1
+        c = pr.c
         before = contact.pressure_values()
         q_conv = model.q.x.array.copy()
         reg.c.value = c
@@ -296,16 +361,16 @@ def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
             model.q.x.array[:] = q_conv
             model.q.x.scatter_forward()
             contact.state.refresh()
-            fails += 1
-            if fails > MAX_FAILS:
+            pr.retries += 1
+            if pr.retries > MAX_FAILS:
                 reg.c.value = rep.final_regularisation
                 return
             # back half-way (in log c) towards the last c that converged, or, if that c itself
             # failed (the garment still moving: a skirt folding), a stiffer spring
             last = rep.final_regularisation
-            c = C_ZERO * reg.c0 if c == 0 else ((last * c) ** 0.5 if c < 0.999 * last else 3 * c)
+            pr.c = C_ZERO * reg.c0 if c == 0 else ((last * c) ** 0.5 if c < 0.999 * last else 3 * c)
             continue
-        fails = 0
+        pr.retries = 0
         moved = np.abs(model.q.x.array[u_dofs] - reg.q_prev.x.array[u_dofs])
         moved = comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
@@ -317,14 +382,19 @@ def _release_loop(rep, built, solver, comm, on_step, c: float) -> None:
         if on_step:
             on_step(rec)
         if c == 0.0:
+            pr.c = 0.0
+        else:
+            # switched evolution relaxation: c follows the spring force it still carries
+            spring = c * moved
+            ratio = spring / pr.spring if pr.spring > 0 else 1 / 3  # (pr.spring = 0: first)
+            pr.c = c * min(max(ratio, MIN_RATIO), MAX_RATIO)
+            pr.spring = spring
+            if pr.c < C_ZERO * reg.c0:
+                pr.c = 0.0
+        if on_checkpoint:
+            on_checkpoint(pr)
+        if c == 0.0:
             return
-        # switched evolution relaxation: c follows the spring force it still carries
-        spring = c * moved
-        ratio = spring / spring_prev if math.isfinite(spring_prev) and spring_prev > 0 else 1 / 3
-        c *= min(max(ratio, MIN_RATIO), MAX_RATIO)
-        spring_prev = spring
-        if c < C_ZERO * reg.c0:
-            c = 0.0
 
 
 #: Release schedule of :func:`_release`.

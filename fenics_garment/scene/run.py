@@ -28,7 +28,7 @@ from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.scene import build as scene_build
-from fenics_garment.scene import config
+from fenics_garment.scene import checkpoint, config, preflight
 from fenics_garment.scene.dressing import (
     RELEASE_TOLERANCE,
     DressingFailed,
@@ -198,12 +198,19 @@ def run(
     quiet: bool = False,
     comm: MPI.Comm = MPI.COMM_WORLD,
     first_step: float | None = None,
+    resume: str | Path | None = None,
+    checkpoints: bool = True,
 ) -> RunResult:
     """Build, dress and write every output of ``scene`` (see the module doc).
 
     ``first_step`` (a fraction of the initial shrink) overrides the first dressing step.
     A dressing that fails after its step cuts still writes the outputs of the last converged
     state; the result then has ``completed = False`` and the reason in ``message``.
+    ``checkpoints``: write ``checkpoint/`` after every converged solve (``scene.checkpoint``);
+    ``resume``: the folder of an interrupted run of ``scene``, continued from its checkpoint
+    (:class:`~fenics_garment.scene.checkpoint.ResumeError` if it has none or another scene).
+    Raises :class:`~fenics_garment.scene.preflight.PreflightError` before any solve when the
+    output folder cannot be written or the scene cannot be dressed (``scene.preflight``).
     """
     if scene.output.error_bars:  # two mesh levels (scene.error_bars)
         from fenics_garment.scene.error_bars import run_with_error_bars
@@ -212,8 +219,13 @@ def run(
     t_start = time.perf_counter()
     say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
     folder = Path(out_root if out_root is not None else scene.output.folder) / scene.name
+    meta = None
+    if resume is not None:
+        folder = Path(resume)
+        meta = checkpoint.read(folder, scene, comm)
+    preflight.scene_limits(scene)
+    preflight.output_folder(folder, comm)
     if comm.rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
         output.write_text(folder / "scene_used.toml", config.dumps(scene))
     comm.Barrier()
     times: dict[str, float] = {}
@@ -225,6 +237,8 @@ def run(
     times["geometry_and_model"] = time.perf_counter() - t0
     say(f"  garment: {len(built.garment.cells)} cells, element {scene.garment.element}, "
         f"{built.dofs} dofs ({times['geometry_and_model']:.1f} s)")  # fmt: skip
+    if meta is None:
+        preflight.check_built(built)
 
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
@@ -251,15 +265,25 @@ def run(
     p = scene.physics
     al = (p.tolerance, p.max_updates) if p.contact == "augmented-lagrangian" else None
     t0 = time.perf_counter()
+    progress = None
+    if meta is not None:
+        progress = checkpoint.restore(built, folder, meta)
+        frames.k = len(progress.report.steps)
+        say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
+            f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
+    ckpt = checkpoint.Writer(folder, scene, comm, meta["checkpoint"] if meta else 0)
+    write_ckpt = (lambda pr: ckpt.write(built, pr)) if checkpoints else None
     completed, message = True, ""
     try:
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
-                       on_failure=on_failure, augmented_lagrangian=al)  # fmt: skip
+                       on_failure=on_failure, augmented_lagrangian=al,
+                       on_checkpoint=write_ckpt, resume=progress)  # fmt: skip
     except DressingFailed as err:
         report, completed, message = err.report, False, str(err)
         say("  " + message)
-    times["dressing"] = time.perf_counter() - t0
+    times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
+    times["checkpoint"] = ckpt.seconds
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
         f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
     effect = report.regularisation_effect

@@ -1,0 +1,221 @@
+"""Checks made before any solving, so that a hopeless run fails in seconds with a clear message.
+
+* the output folder can be made and written (not under a file, not read-only);
+* every MPI rank owns some garment cells;
+* the body mesh resolves the body's curvature (facet size against the smallest body radius);
+* the garment does not start deeper inside the body than the dressing can undo (the body would
+  have to shrink past its own axis, where the closest-point normal is meaningless).
+
+and, before anything is built, that the scene's sizes and counts are within what can run at all
+(:func:`scene_limits`: a 1e-300 m mesh size would make gmsh run out of memory, 10¹⁸ dressing steps
+would never end).
+
+Each raises :class:`PreflightError` (a ``ValueError``) naming the numbers and what to do. The
+checks are collective: every rank gets the same answer.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from pathlib import Path
+
+from fenics_garment._stack import MPI
+
+#: Largest body facet size relative to the smallest body radius r: a chord h deviates from the
+#: circle by r(1 − cos(h/2r)) ≈ h²/(8r), i.e. 3 % of r at h = r/2 — the size of a typical
+#: contact penetration tolerance multiplied many times; finer is needed for accurate pressure.
+MAX_BODY_H_OVER_R = 0.5
+#: Largest garment element size relative to the smallest body radius (six elements around it).
+MAX_GARMENT_H_OVER_R = 1.0
+#: Largest shrink of the body (deepest initial penetration + margin) relative to its smallest
+#: radius: beyond it the shrunk body has almost no cross-section left.
+MAX_SHRINK_OVER_R = 0.8
+
+
+#: Most triangles a body or garment mesh may have (about 1 GB of gmsh/DOLFINx memory).
+MAX_TRIANGLES = 2_000_000
+#: Area [m²] assumed for a mannequin or scan body before it is built (a whole adult ≈ 1.8 m²).
+BODY_AREA = 2.0
+#: Upper bounds of counts; beyond them a run would not end in a useful time.
+MAX_COUNTS = {"dressing.steps": 10_000, "dressing.max_cuts": 40, "physics.max_updates": 1_000}
+#: Lengths of a cylinder body [m] that a garment run makes sense for (a finger to a barrel).
+LENGTH_RANGE = (1e-3, 10.0)
+#: Penalty scale κ̂ (default 10, see contact.terms.default_penalty): beyond it the contact
+#: stiffness swamps the fabric's by more than 10⁶ and Newton's linear solves lose all digits.
+MAX_KAPPA_HAT = 1e6
+
+
+class PreflightError(ValueError):
+    """A run cannot start: names the value and what to change."""
+
+
+def _collective(comm: MPI.Comm, message: str | None) -> None:
+    message = comm.bcast(message, root=0)
+    if message:
+        raise PreflightError(message)
+
+
+def output_folder(folder: Path, comm: MPI.Comm) -> None:
+    """Make ``folder`` (rank 0) and check that a file can be written in it."""
+    message = None
+    if comm.rank == 0:
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            probe = folder / f".write-test-{os.getpid()}"
+            probe.write_bytes(b"")
+            probe.unlink()
+        except OSError as err:
+            why = err.strerror or type(err).__name__
+            message = (f"cannot write the output folder {folder}: {why}"
+                       f"{f' ({err.filename})' if err.filename else ''}; "
+                       "choose another output root with -o/--output")  # fmt: skip
+    _collective(comm, message)
+
+
+def scene_limits(scene) -> None:
+    """Sizes and counts of ``scene`` that can run at all (checked before anything is built)."""
+    b, g, src = scene.body, scene.garment, scene.source or scene.name
+
+    def fail(key: str, message: str) -> None:
+        raise PreflightError(f"{src}: [{key}] {message}")
+
+    for key in MAX_COUNTS:
+        section, name = key.split(".")
+        value = getattr(getattr(scene, section), name)
+        if value > MAX_COUNTS[key]:
+            fail(key, f"= {value} is more than {MAX_COUNTS[key]}; the run would not end")
+    k = scene.physics.kappa_hat
+    if k > MAX_KAPPA_HAT:
+        why = "the linear solves would lose every digit (default 10)"
+        fail("physics.kappa_hat", f"= {k:g} is more than {MAX_KAPPA_HAT:g}: {why}")
+    if b.kind == "mannequin":
+        mannequin_limits(scene)
+    area = BODY_AREA
+    if b.kind == "cylinder":
+        lo, hi = LENGTH_RANGE
+        for key in ("radius", "length"):
+            v = getattr(b, key)
+            if not lo <= v <= hi:
+                fail(f"body.{key}", f"= {v:g} m is outside [{lo:g}, {hi:g}] m")
+        h_max = MAX_BODY_H_OVER_R * b.radius
+        if b.mesh_size > h_max:
+            fail("body.mesh_size", f"= {b.mesh_size:g} m is too coarse for a cylinder of radius "
+                 f"{b.radius:g} m; use body.mesh_size <= {h_max:.3g} m")  # fmt: skip
+        area = 2 * math.pi * b.radius * (b.length + 0.1 + b.radius)
+    for key, h in (("body.mesh_size", b.mesh_size), ("garment.mesh_size", g.mesh_size)):
+        h_min = math.sqrt(area / (math.sqrt(3) / 4 * MAX_TRIANGLES))
+        if h < h_min:
+            n = MAX_TRIANGLES * (h_min / h) ** 2 if h > 1e-150 else math.inf
+            fail(key, f"= {h:g} m would make about {n:.2g} triangles (at most "
+                 f"{MAX_TRIANGLES:.0e}); use mesh_size >= {h_min:.2g} m")  # fmt: skip
+        if h > 1.0:
+            fail(key, f"= {h:g} m is larger than a body; use a few centimetres")
+
+
+#: Levels a garment kind needs inside the mannequin's crop (z_range) and on the body.
+NEEDED_LEVELS = {"gilet": ("hip", "neck_base"), "dress": ("hip", "neck_base"),
+                 "stocking": ("ankle", "thigh")}  # fmt: skip
+#: Largest girth or stature [m] of a mannequin (the largest EN 13402-3 hip girth is 1.5 m).
+MAX_HUMAN_LENGTH = 3.0
+
+
+def mannequin_limits(scene) -> None:
+    """The mannequin's measurements are a body's, and its crop keeps what the garment needs."""
+    from fenics_garment.geometry.measurements import measurements
+
+    b, src = scene.body, scene.source or scene.name
+    for k, v in b.measurements.items():
+        if v > MAX_HUMAN_LENGTH:
+            raise PreflightError(f"{src}: [body.measurements.{k}] = {v:g} is more than "
+                                 f"{MAX_HUMAN_LENGTH:g} m: not a human body")  # fmt: skip
+    try:
+        m = measurements(b.size, **b.measurements)
+    except (ValueError, TypeError) as err:
+        raise PreflightError(f"{src}: [body.measurements] {err}") from None
+    needed = NEEDED_LEVELS.get(scene.garment.kind)
+    if b.z_range and needed:
+        lo, hi = (m.height(level) for level in needed)
+        if not (b.z_range[0] < lo and b.z_range[1] > hi):
+            raise PreflightError(
+                f"{src}: [body.z_range] = {b.z_range} crops away part of the body a "
+                f"{scene.garment.kind} needs: {needed[0]} at {lo:.2f} m to {needed[1]} at "
+                f"{hi:.2f} m; use for example [{lo - 0.1:.2f}, {hi + 0.1:.2f}] or [] (no crop)"
+            )
+
+
+def smallest_body_radius(built) -> tuple[float, str]:
+    """The smallest radius of the body where the garment is, and where (level name)."""
+    sc = built.scene
+    if sc.body.kind == "cylinder":
+        return sc.body.radius, "cylinder"
+    level = min(built.garment.levels, key=lambda lv: lv.body_girth)
+    return level.body_girth / (2 * math.pi), f"level {level.name!r}"
+
+
+def ranks_own_cells(n_owned: int, n_cells: int, comm: MPI.Comm) -> None:
+    """Every rank owns at least one garment cell."""
+    counts = comm.allgather(n_owned)
+    empty = [r for r, n in enumerate(counts) if n == 0]
+    if empty:
+        raise PreflightError(
+            f"the garment has {n_cells} cells for {comm.size} MPI ranks and rank(s) "
+            f"{', '.join(map(str, empty))} own none; run with fewer ranks (about one per "
+            "2000 cells is efficient) or a finer garment.mesh_size"
+        )
+
+
+def mesh_resolution(built) -> None:
+    """The body's facets are small against its curvature radius."""
+    sc = built.scene
+    r, where = smallest_body_radius(built)
+    h = sc.body.mesh_size
+    if h > MAX_BODY_H_OVER_R * r:
+        raise PreflightError(
+            f"{sc.source or sc.name}: [body.mesh_size] = {h:g} m is too coarse for the body's "
+            f"curvature: its smallest radius ({where}) is {r:.3g} m, so facets would cut up to "
+            f"{h * h / (8 * r) * 1e3:.1f} mm into the curved surface; use body.mesh_size <= "
+            f"{MAX_BODY_H_OVER_R * r:.3g} m (r/2)"
+        )
+
+
+def garment_resolution(built) -> None:
+    """The garment's elements are not larger than the smallest body radius."""
+    sc = built.scene
+    r, where = smallest_body_radius(built)
+    h = sc.garment.mesh_size
+    if h > MAX_GARMENT_H_OVER_R * r:
+        raise PreflightError(
+            f"{sc.source or sc.name}: [garment.mesh_size] = {h:g} m is too coarse to wrap the "
+            f"body: its smallest radius ({where}) is {r:.3g} m; use garment.mesh_size <= "
+            f"{MAX_GARMENT_H_OVER_R * r:.3g} m"
+        )
+
+
+def initial_depth(built, penetration0: float) -> None:
+    """The dressing's shrink s₀ = penetration + margin leaves a body to dress."""
+    sc = built.scene
+    r, where = smallest_body_radius(built)
+    s0 = max(penetration0, 0.0) + sc.dressing.margin
+    if s0 >= MAX_SHRINK_OVER_R * r:
+        raise PreflightError(
+            f"{sc.source or sc.name}: the garment starts {penetration0 * 1e3:.3g} mm inside the "
+            f"body; with dressing.margin {sc.dressing.margin * 1e3:.3g} mm the body would have to "
+            f"shrink by {s0 * 1e3:.3g} mm, more than {MAX_SHRINK_OVER_R:.0%} of its smallest "
+            f"radius ({where}, {r * 1e3:.1f} mm), where the contact normal is meaningless; use "
+            "a less negative garment.ease (or a smaller dressing.margin)"
+        )
+
+
+def check_built(built) -> float:
+    """The checks that need the built scene; returns the initial penetration [m]."""
+    from fenics_garment.scene.dressing import initial_penetration
+
+    mesh = built.model.geometry.mesh
+    n_owned = mesh.topology.index_map(mesh.topology.dim).size_local
+    ranks_own_cells(n_owned, len(built.garment.cells), mesh.comm)
+    mesh_resolution(built)
+    garment_resolution(built)
+    pen = initial_penetration(built.contact)
+    initial_depth(built, pen)
+    return pen
