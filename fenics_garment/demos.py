@@ -115,23 +115,22 @@ def _plot_curve(path: Path, curve, ref: float, P: float) -> None:
     plt.close(fig)
 
 
-#: The scene files of the demos: ``demos/`` next to the package in a source checkout.
-SCENES = Path(__file__).resolve().parent.parent / "demos"
+#: The bundled scene files (package data; ``demos/*.toml`` are links to them).
+SCENES = Path(__file__).resolve().parent / "scenes"
+
+
+def _run_scene(scene_file: str, output: Path, quiet: bool):
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    return run(config.load(SCENES / scene_file), Path(output), quiet=quiet)
 
 
 def _scene_demo(scene_file: str) -> Callable[..., int]:
     """A demo that runs a bundled scene file (``fenics-garment run demos/<scene_file>``)."""
 
     def run_demo(output: Path, quiet: bool = False) -> int:
-        from fenics_garment.scene import config
-        from fenics_garment.scene.run import run
-
-        path = SCENES / scene_file
-        if not path.is_file():
-            print(f"scene file {path} not found: the scene demos need a source checkout")
-            return 2
-        result = run(config.load(path), Path(output), quiet=quiet)
-        return 0 if result.completed else 3
+        return 0 if _run_scene(scene_file, output, quiet).completed else 3
 
     return run_demo
 
@@ -143,14 +142,8 @@ def _limb_demo(scene_file: str, levels: tuple[str, ...], ankle: str | None = Non
     def run_demo(output: Path, quiet: bool = False) -> int:
         from fenics_garment import compression as cp
         from fenics_garment._stack import MPI
-        from fenics_garment.scene import config
-        from fenics_garment.scene.run import run
 
-        path = SCENES / scene_file
-        if not path.is_file():
-            print(f"scene file {path} not found: the scene demos need a source checkout")
-            return 2
-        result = run(config.load(path), Path(output), quiet=quiet)
+        result = _run_scene(scene_file, output, quiet)
         checks = cp.level_checks(result.built, list(levels), half_width=0.01)
         if MPI.COMM_WORLD.rank == 0 and not quiet:
             print("mean pressure in a ±1 cm band at each level vs Laplace's law (free ends):")
