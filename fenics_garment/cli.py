@@ -10,6 +10,7 @@ import argparse
 import os
 import sys
 from collections.abc import Sequence
+from dataclasses import replace
 from pathlib import Path
 
 from fenics_garment import __version__
@@ -116,6 +117,8 @@ def _cmd_run(args: argparse.Namespace) -> int:
 
     try:
         scene = _load_scene(args)
+        if args.error_bars:
+            scene = replace(scene, output=replace(scene.output, error_bars=True))
         if args.check:
             return _check(scene)
         result = run(scene, args.output, quiet=args.quiet, resume=args.resume,
@@ -201,6 +204,9 @@ def build_parser() -> argparse.ArgumentParser:
         help="do not write checkpoints (a killed run then starts over)",
     )
     p_run.add_argument("--check", action="store_true", help="only validate (as `check`)")
+    p_run.add_argument("--error-bars", action="store_true",
+                       help="also solve on a 2x coarser garment mesh first: a Richardson "
+                       "error bar on every region's pressure ([output] error_bars)")  # fmt: skip
     p_run.set_defaults(func=_cmd_run)
 
     p_check = sub.add_parser(

@@ -212,10 +212,11 @@ def run(
     Raises :class:`~fenics_garment.scene.preflight.PreflightError` before any solve when the
     output folder cannot be written or the scene cannot be dressed (``scene.preflight``).
     """
-    if scene.output.error_bars:  # two mesh levels (scene.error_bars)
+    if scene.output.error_bars and resume is None:  # two mesh levels (scene.error_bars)
         from fenics_garment.scene.error_bars import run_with_error_bars
 
-        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm, first_step=first_step)
+        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm,
+                                   first_step=first_step, checkpoints=checkpoints)  # fmt: skip
     t_start = time.perf_counter()
     say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
     folder = Path(out_root if out_root is not None else scene.output.folder) / scene.name
