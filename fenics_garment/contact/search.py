@@ -13,6 +13,11 @@ AABB tree) is built once per scene; each rank queries only its own garment point
   ``c`` (continuous over the surface); ``normal="gradient"`` uses the distance gradient
   ``(x − c)/|x − c|`` off the surface (continuous outside, falls back to Phong within
   ``1e-12`` m of the surface). The distance itself is always the exact one.
+* **Crop to the garment's reach** (:func:`reach_mask`): body triangles outside the garment's
+  bounding box grown by a margin are left out of the AABB tree (``BodySurface(..., keep=)``).
+  Face indices, normals and pseudonormals stay those of the whole body, so for every point whose
+  distance to the body is below ``margin − (its travel out of the box)`` the answer is exactly the
+  uncropped one: the triangle holding its closest point meets the grown box.
 * **Broad phase**: the distance is 1-Lipschitz, ``|d(x) − d(x₀)| ≤ |x − x₀|``, so a point whose
   last exact distance minus its travel since then exceeds the contact band cannot be in contact
   and is not searched (no approximation involved).
@@ -30,6 +35,9 @@ try:
     import igl
 except ImportError as err:  # pragma: no cover - depends on the environment
     raise ImportError("fenics_garment.contact needs libigl: `pip install libigl`") from err
+
+#: Default crop margin [m]: the contact band (0.02 m, ContactState) plus 3 cm of garment travel.
+REACH_MARGIN = 0.05
 
 F64 = npt.NDArray[np.float64]
 I64 = npt.NDArray[np.int64]
@@ -64,9 +72,13 @@ class BodySurface:
         vertices: (n, 3) vertex coordinates [m].
         triangles: (m, 3) vertex indices, oriented so that face normals point out of the body.
             A closed mesh with negative enclosed volume is flipped automatically.
+        keep: optional (m,) boolean mask of the triangles searched (see :func:`reach_mask`);
+            the others stay in the normals but not in the tree. ``dropped`` counts them.
     """
 
-    def __init__(self, vertices: npt.ArrayLike, triangles: npt.ArrayLike) -> None:
+    def __init__(
+        self, vertices: npt.ArrayLike, triangles: npt.ArrayLike, keep: npt.ArrayLike | None = None
+    ) -> None:
         self.vertices = np.ascontiguousarray(vertices, dtype=np.float64)
         self.triangles = np.ascontiguousarray(triangles, dtype=np.int64)
         v, f = self.vertices, self.triangles
@@ -79,9 +91,17 @@ class BodySurface:
         self.face_normals = _unit(cross)
         self.vertex_normals = self._angle_weighted_vertex_normals()
         self._edge_of, self.edge_normals = self._edge_pseudonormals()
+        if keep is None:
+            self._face_ids = np.arange(len(f), dtype=np.int64)
+        else:
+            self._face_ids = np.flatnonzero(np.asarray(keep, dtype=bool)).astype(np.int64)
+            if len(self._face_ids) == 0:
+                raise ValueError("BodySurface: the crop keeps no triangle of the body")
+        self._searched = np.ascontiguousarray(f[self._face_ids])
+        self.dropped = len(f) - len(self._face_ids)
         self._tree = igl.AABB()
         t0 = time.perf_counter()
-        self._tree.init(self.vertices, self.triangles)
+        self._tree.init(self.vertices, self._searched)
         self.build_time = time.perf_counter() - t0
         lengths = np.linalg.norm(
             v[f[:, [1, 2, 0]]] - v[f[:, [0, 1, 2]]], axis=-1
@@ -125,8 +145,8 @@ class BodySurface:
         if len(x) == 0:
             e = np.zeros((0, 3))
             return ClosestPoints(np.zeros(0), e, np.zeros(0, np.int64), e.copy())
-        sq, face, c = self._tree.squared_distance(self.vertices, self.triangles, x)
-        face = np.asarray(face, dtype=np.int64)
+        sq, face, c = self._tree.squared_distance(self.vertices, self._searched, x)
+        face = self._face_ids[np.asarray(face, dtype=np.int64)]
         bary = self._barycentric(c, face)
         pseudo = self._pseudonormal(face, bary, feature_tol)
         diff = x - c
@@ -175,6 +195,19 @@ class BodySurface:
             k = np.argmax(bary[on_vertex], axis=1)
             pn[on_vertex] = self.vertex_normals[self.triangles[face[on_vertex], k]]
         return pn
+
+
+def reach_mask(vertices: npt.ArrayLike, triangles: npt.ArrayLike, points: npt.ArrayLike,
+               margin: float) -> npt.NDArray[np.bool_]:  # fmt: skip
+    """Triangles that meet the bounding box of ``points`` grown by ``margin`` on every side.
+
+    The garment's reference points and a margin ≥ (largest displacement + contact band) keep
+    every triangle a contact search can need (module doc); the rest can be dropped.
+    """
+    x = np.asarray(points, dtype=np.float64).reshape(-1, 3)
+    lo, hi = x.min(axis=0) - margin, x.max(axis=0) + margin
+    tri = np.asarray(vertices, dtype=np.float64)[np.asarray(triangles)]  # (m, 3, 3)
+    return np.all((tri.max(axis=1) >= lo) & (tri.min(axis=1) <= hi), axis=1)
 
 
 @dataclass

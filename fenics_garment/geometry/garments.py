@@ -256,10 +256,14 @@ def _levels_from(
     return out, table
 
 
-def _mesh_options(g: Any, h: float, quads: bool, per_circle: int = 24) -> None:
+def _mesh_options(g: Any, h: float, quads: bool) -> None:
+    """Uniform target size ``h``: gmsh's sizes from the loft's points and from the surface
+    curvature are switched off (with them the gilet's median edge stayed ≈ 13 mm for any h from
+    0.015 to 0.08: 24 elements per circle on the ≈ 5 cm flank curvature of the torso section)."""
     g.option.setNumber("Mesh.MeshSizeMax", h)
     g.option.setNumber("Mesh.MeshSizeMin", h / 4)
-    g.option.setNumber("Mesh.MeshSizeFromCurvature", per_circle)
+    g.option.setNumber("Mesh.MeshSizeFromPoints", 0)
+    g.option.setNumber("Mesh.MeshSizeFromCurvature", 0)
     g.option.setNumber("Mesh.MeshSizeExtendFromBoundary", 1)
     g.option.setNumber("Mesh.Algorithm", 8 if quads else 6)
     if quads:

@@ -150,7 +150,8 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     model = ShellModel(geo, make_fabric(scene), element=scene.garment.element)
     p = scene.physics
     gravity = model.add_gravity() if p.gravity else None
-    sbody = contact_body(body)
+    keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
+    sbody = search.BodySurface(body.vertices, body.triangles, keep=keep)  # cropped search body
     contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model),
                                    mu=p.friction if p.friction > 0 else None)  # fmt: skip
     mu = contact.friction.mu if contact.friction else None

@@ -253,6 +253,7 @@ def run(
         "dofs": built.dofs,
         "garment_cells": len(built.garment.cells),
         "body_triangles": len(built.body.triangles),
+        "body_triangles_dropped": built.search_body.dropped,  # outside the garment's reach
         "ranks": comm.size,
         **measures,
         "max_membrane_strain": max_strain,
