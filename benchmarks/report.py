@@ -162,7 +162,8 @@ tree; each rank searches only the contact points of the garment cells it owns, s
 work per rank falls as 1/ranks and needs no communication; the cost that does not fall is the
 tree build and the replicated body (O(body triangles) memory and time per rank: < 1 MB of arrays
 for 8.6k triangles; libigl's tree build took 0.04 s for 50k triangles, docs STACK.md), which a
-scan of 10⁵–10⁶ triangles would make noticeable but still small next to the shell. The crop cuts it further. Outputs: the final fields are gathered to rank 0 (region table,
+scan of 10⁵–10⁶ triangles would make noticeable but still small next to the shell. The crop
+cuts it further. Outputs: the final fields are gathered to rank 0 (region table,
 body pressure, XDMF, pictures), which is O(garment nodes) on rank 0 — fine for 10⁵ nodes, a
 bottleneck only far beyond the garment sizes used here; VTX frames are written in parallel by
 ADIOS2. The linear solver (MUMPS LU) is what limits scaling: its factorisation speed-up on more
