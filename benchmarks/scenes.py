@@ -26,6 +26,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -96,6 +97,9 @@ def child(spec: dict) -> dict:
         rec["rebuild"] = _rebuild_cost(res.built, dolfinx, comm)
     rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, root=0)
     rec["peak_rss_mb_per_rank"] = rss
+    comm.Barrier()
+    if comm.rank == 0:
+        shutil.rmtree(out, ignore_errors=True)  # summary.json etc.: only the record is kept
     return rec
 
 
@@ -133,6 +137,7 @@ def _record(res, spec: dict, comm) -> dict:
         "solver_time_s": st,
         "regions_mean_kPa": {r["region"]: r["mean_kPa"] for r in sm["regions"]},
         "max_pressure_kPa": sm["max_pressure_kPa"],
+        "message": sm["message"],
         "contact_force_N": sm["contact_force_N"],
         "loadavg": os.getloadavg(),
     }
