@@ -2,12 +2,15 @@
 
     python -m benchmarks [--quick|--full] [--repeat N] [name ...]
 
-``name`` is a suite (``shells``, ``contact``) or a shell case of
+``name`` is a suite (``shells``, ``contact``, ``scenes``) or a shell case of
 :data:`fenics_garment.verification.shells.CASES` (then only those shell cases run). Without
-names all suites run. Each suite writes ``benchmarks/results/<suite>.json``; the report
+names the shells and contact suites run. Each suite writes
+``benchmarks/results/<suite>.json``; the report
 ``benchmarks/results/REPORT.md`` (tables, work–precision PNGs) is rebuilt from all JSON files.
 The contact suite runs its ``--quick`` sizes unless ``--full`` is given (its own full size takes
-tens of minutes).
+tens of minutes). ``scenes`` (gilet cost growth, 1 vs 2 ranks, skips on/off, the FEniCSx-Shells
+peer, the stress table; ``benchmarks/scenes.py``) runs only when named, e.g.
+``python -m benchmarks scenes`` or ``python -m benchmarks scenes growth peer``.
 """
 
 from __future__ import annotations
@@ -15,18 +18,22 @@ from __future__ import annotations
 import sys
 import time
 
-from benchmarks import contact, report, shells
+from benchmarks import contact, report, scenes, shells
 from fenics_garment._stack import MPI
 
-SUITES = ("shells", "contact")
+SUITES = ("shells", "contact", "scenes")
+DEFAULT_SUITES = ["shells", "contact"]
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     flags = [a for a in argv if a.startswith("--")]
     mode, repeat, names = shells.parse(argv)
-    cases = [n for n in names if n not in SUITES]
-    suites = [n for n in names if n in SUITES] or (["shells"] if cases else list(SUITES))
+    parts = [n for n in names if n in scenes.PARTS]
+    cases = [n for n in names if n not in SUITES and n not in scenes.PARTS]
+    suites = [n for n in names if n in SUITES] or (
+        ["shells"] if cases else ["scenes"] if parts else DEFAULT_SUITES
+    )
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *a, **k: None)
     t0 = time.perf_counter()
@@ -35,6 +42,8 @@ def main(argv: list[str] | None = None) -> int:
         shells.main([a for a in flags if a != "--repeat"] + rep + cases)
     if "contact" in suites:
         contact.main(["--quick"] if mode != "full" else [])
+    if "scenes" in suites and comm.rank == 0:  # it starts its own mpiexec subprocesses
+        scenes.main(parts + (["--quick"] if mode == "quick" else []))
     if comm.rank == 0:
         report.write_report(say=say)
     say(f"benchmarks ({mode}: {', '.join(suites)}) done in {time.perf_counter() - t0:.0f} s")

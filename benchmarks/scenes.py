@@ -1,0 +1,474 @@
+"""Scene benchmarks (issue 7): cost growth, parallel speed-up, skips on/off, peer side by side.
+
+* ``growth``: the cotton gilet (``demos/cotton_gilet.toml`` through
+  :func:`fenics_garment.scene.run.run`, no VTX/XDMF/pictures) at several garment mesh sizes on
+  2 ranks, each in its own ``mpiexec`` subprocess so the peak RSS per rank is per size; the
+  fitted exponent p of dressing time ∝ dofs^p and the time split of ``summary.json``.
+* ``parallel``: the same scene on 1 and 2 ranks: speed-up and the largest relative difference of
+  the region mean pressures.
+* ``skips``: each work-saving skip on and off, same answer expected: the body cropped to the
+  garment's reach (``search.reach_mask``) vs the whole body searched; no friction term at μ = 0
+  vs the term assembled with μ = 0; no gravity term vs the term with g = 0; compiled forms and
+  the sparsity pattern reused between steps vs rebuilt (measured: cost of one rebuild × solves).
+* ``peer``: FEniCSx-Shells' Naghdi semi-cylinder demo, adapted at run time in a temporary folder
+  by a few text substitutions of our own (never stored here), against our semi-cylinder case.
+* ``stress``: ``pytest -m stress tests/stress`` with a JUnit XML in a temporary folder; each
+  test's outcome, time and printed measurement go to ``stress.json`` (the tests write nothing).
+
+Writes ``benchmarks/results/scenes.json`` (and ``stress.json``); ``os.getloadavg()`` is in every
+record: the two cores are shared, so times are only comparable within one run.
+
+    python -m benchmarks scenes [--quick] [growth|parallel|skips|peer|stress ...]
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+HERE = Path(__file__).resolve().parent
+ROOT = HERE.parent
+RESULTS = HERE / "results"
+GILET = ROOT / "demos" / "cotton_gilet.toml"
+PARTS = ("growth", "parallel", "skips", "peer", "stress")
+SIZES = {"quick": [0.04, 0.03], "default": [0.03, 0.02, 0.014, 0.0085]}
+SKIP_SIZE = {"quick": 0.04, "default": 0.03}
+SINK = None  # called with every finished record (the main loop saves scenes.json there)
+MPIEXEC = Path(sys.executable).parent / "mpiexec"
+PEER_GIT = Path("/work/.mirror/FEniCS-Shells+fenicsx-shells/repo")
+PEER_DEMO = "demo/demo_nonlinear-naghdi-clamped-semicylinder.py"
+
+
+def _env() -> dict:
+    return dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
+
+
+# --------------------------------------------------------------------------------------------
+# child: one scene run in this process (maybe under mpiexec)
+# --------------------------------------------------------------------------------------------
+def child(spec: dict) -> dict:
+    """Run the scene of ``spec`` (mesh_size, variant) and return its record (rank 0)."""
+    import resource
+    from dataclasses import replace
+
+    from fenics_garment._stack import MPI, dolfinx
+    from fenics_garment.contact import search
+    from fenics_garment.scene import build as scene_build
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    comm = MPI.COMM_WORLD
+    s = config.load(spec.get("scene", GILET))
+    variant = spec.get("variant", "default")
+    g = replace(s.garment, mesh_size=spec["mesh_size"])
+    phys = s.physics
+    if variant == "friction-off":
+        phys = replace(phys, friction=0.0)
+    if variant == "gravity-off":
+        phys = replace(phys, gravity=False)
+    s = replace(s, garment=g, physics=phys,
+                output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
+    original = scene_build.build
+
+    def patched(scene, comm_):
+        built = original(scene, comm_)
+        if variant == "friction-term-mu0":
+            built.contact.friction.mu.value = 0.0
+        if variant == "gravity-term-g0":
+            built.gravity.value[:] = 0.0
+        return built
+
+    if variant == "crop-off":
+        search.reach_mask = lambda v, t, p, m: np.ones(len(t), dtype=bool)
+    scene_build.build = patched
+    out = Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))
+    res = run(s, out, quiet=True)
+    rec = _record(res, spec, comm)
+    if spec.get("rebuild"):
+        rec["rebuild"] = _rebuild_cost(res.built, dolfinx, comm)
+    rss = comm.gather(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0, root=0)
+    rec["peak_rss_mb_per_rank"] = rss
+    comm.Barrier()
+    if comm.rank == 0:
+        shutil.rmtree(out, ignore_errors=True)  # summary.json etc.: only the record is kept
+    return rec
+
+
+def _record(res, spec: dict, comm) -> dict:
+    sm = res.summary
+    tm = sm["time_s"]
+    st = sm["solver_time_s"]
+    steps = sm["dressing"]["steps"]
+    dressing = tm["dressing"]
+    linear = st["solve"] - st["residual"] - st["jacobian"]
+    assembly = st["residual"] + st["jacobian"] - st["hooks"]
+    return {
+        "case": "gilet",
+        "variant": spec.get("variant", "default"),
+        "mesh_size": spec["mesh_size"],
+        "cells": sm["garment_cells"],
+        "dofs": sm["dofs"],
+        "ranks": sm["ranks"],
+        "completed": sm["completed"],
+        "body_triangles": sm["body_triangles"],
+        "body_triangles_dropped": sm.get("body_triangles_dropped"),
+        "solves": len(steps),
+        "newton_its": sm["dressing"]["newton_iterations"],
+        "its_per_solve": sm["dressing"]["newton_iterations"] / max(len(steps), 1),
+        "wall_s": tm["total"],
+        "jit_s": tm["jit"],
+        "warm_wall_s": tm["total"] - tm["jit"],
+        "dressing_s": dressing,
+        "linear_solver_s": linear,
+        "assemble_s": assembly,
+        "contact_hooks_s": st["hooks"],
+        "contact_search_s": sm["contact_search_s"],
+        "linear_share": linear / dressing if dressing else None,
+        "time_s": tm,
+        "solver_time_s": st,
+        "regions_mean_kPa": {r["region"]: r["mean_kPa"] for r in sm["regions"]},
+        "max_pressure_kPa": sm["max_pressure_kPa"],
+        "message": sm["message"],
+        "contact_force_N": sm["contact_force_N"],
+        "loadavg": os.getloadavg(),
+    }
+
+
+def _rebuild_cost(built, dolfinx, comm) -> dict:
+    """What rebuilding the compiled forms and the matrix (sparsity) at every solve would cost:
+    one rebuild timed here (forms from the warm JIT cache), and the answer it gives (residual
+    norm of the rebuilt form against the reused one at the final state)."""
+    from dolfinx.fem import petsc as fp
+
+    m = built.model
+    F = m.residual()
+    J = m.jacobian(F)
+    comm.Barrier()
+    t0 = time.perf_counter()
+    Ff, Jf = dolfinx.fem.form(F), dolfinx.fem.form(J)
+    t_forms = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    A = fp.create_matrix(Jf)
+    t_sparsity = time.perf_counter() - t0
+    built.contact.refresh()
+    b = fp.assemble_vector(Ff)
+    from petsc4py import PETSc
+
+    b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    norm = b.norm()
+    A.destroy()
+    b.destroy()
+    return {"forms_s": comm.allreduce(t_forms, op=_max()),
+            "sparsity_s": comm.allreduce(t_sparsity, op=_max()),
+            "residual_norm_rebuilt": norm}  # fmt: skip
+
+
+def _max():
+    from fenics_garment._stack import MPI
+
+    return MPI.MAX
+
+
+# --------------------------------------------------------------------------------------------
+# parent: subprocesses
+# --------------------------------------------------------------------------------------------
+def spawn(spec: dict, ranks: int = 2, timeout: float = 1800) -> dict:
+    """One child run in ``mpiexec -n ranks``; failures become records."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "rec.json"
+        cmd = [str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", "benchmarks.scenes",
+               "--child", json.dumps(spec), str(path)]  # fmt: skip
+        t0 = time.perf_counter()
+        p = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
+                           timeout=timeout)  # fmt: skip
+        if p.returncode != 0 or not path.exists():
+            rec = {**spec, "ranks": ranks, "status": "failed", "loadavg": os.getloadavg(),
+                   "wall_s": time.perf_counter() - t0,
+                   "error": (p.stderr or p.stdout)[-600:]}  # fmt: skip
+        else:
+            rec = {**json.loads(path.read_text()), "status": "ok"}
+    if SINK is not None:
+        SINK(rec)
+    return rec
+
+
+def fit_exponent(dofs: list[float], times: list[float]) -> float:
+    """Least-squares slope of log t against log dofs."""
+    return float(np.polyfit(np.log(dofs), np.log(times), 1)[0])
+
+
+def growth(mode: str, say) -> tuple[list[dict], dict]:
+    recs = []
+    for h in SIZES[mode]:
+        r = spawn({"mesh_size": h, "rebuild": h == SKIP_SIZE[mode]})
+        say(_line(r))
+        recs.append(r)
+    ok = [r for r in recs if r["status"] == "ok"]
+    summary = {}
+    if len(ok) >= 2:
+        d = [r["dofs"] for r in ok]
+        summary = {
+            "exponent_dressing": fit_exponent(d, [r["dressing_s"] for r in ok]),
+            "exponent_warm_wall": fit_exponent(d, [r["warm_wall_s"] for r in ok]),
+            "exponent_peak_rss": fit_exponent(d, [max(r["peak_rss_mb_per_rank"]) for r in ok]),
+            "mean_its_per_solve": float(np.mean([r["its_per_solve"] for r in ok])),
+        }
+    return recs, summary
+
+
+def parallel(mode: str, say, two: dict | None) -> tuple[list[dict], dict]:
+    h = SKIP_SIZE[mode]
+    one = spawn({"mesh_size": h}, ranks=1)
+    say(_line(one))
+    two = two or spawn({"mesh_size": h}, ranks=2)
+    out = {}
+    if one["status"] == two["status"] == "ok":
+        out = {"speedup_warm": one["warm_wall_s"] / two["warm_wall_s"],
+               "speedup_dressing": one["dressing_s"] / two["dressing_s"],
+               "max_region_rel_diff": _region_diff(one, two)}  # fmt: skip
+    return [one], out
+
+
+def _region_diff(a: dict, b: dict) -> float:
+    ra, rb = a["regions_mean_kPa"], b["regions_mean_kPa"]
+    return max((abs(ra[k] - rb[k]) / max(abs(rb[k]), 1e-12) for k in ra if rb.get(k)),
+               default=0.0)  # fmt: skip
+
+
+def skips(mode: str, say, base: dict | None) -> tuple[list[dict], list[dict]]:
+    h = SKIP_SIZE[mode]
+    base = base or spawn({"mesh_size": h, "rebuild": True})
+    recs = []
+    for v in ("crop-off", "friction-off", "friction-term-mu0", "gravity-off", "gravity-term-g0"):
+        r = spawn({"mesh_size": h, "variant": v})
+        say(_line(r))
+        recs.append(r)
+    by = {r["variant"]: r for r in [*recs, base]}
+    table = []
+    for skip, on, off in (("crop body to the garment's reach", "default", "crop-off"),
+                          ("no friction term at μ = 0", "friction-off", "friction-term-mu0"),
+                          ("no gravity term when off", "gravity-off",
+                           "gravity-term-g0")):  # fmt: skip
+        a, b = by.get(on, {}), by.get(off, {})
+        if a.get("status") == b.get("status") == "ok":
+            table.append({"skip": skip, "on_s": a["dressing_s"], "off_s": b["dressing_s"],
+                          "saving_s": b["dressing_s"] - a["dressing_s"],
+                          "search_on_s": a["contact_search_s"],
+                          "search_off_s": b["contact_search_s"],
+                          "max_region_rel_diff": _region_diff(a, b),
+                          "triangles_dropped": a.get("body_triangles_dropped")})  # fmt: skip
+    rb = base.get("rebuild")
+    if rb:
+        per = rb["forms_s"] + rb["sparsity_s"]
+        table.append({"skip": "reuse compiled forms + sparsity between solves",
+                      "on_s": base["dressing_s"],
+                      "off_s": base["dressing_s"] + per * base["solves"],
+                      "saving_s": per * base["solves"], "rebuild_per_solve_s": per,
+                      "max_region_rel_diff": 0.0})  # fmt: skip
+    return recs, table
+
+
+def _line(r: dict) -> str:
+    if r.get("status") != "ok":
+        return f"  {r.get('variant', 'default')} h={r.get('mesh_size')}: FAILED {r.get('error')}"
+    return (f"  {r['variant']:18} h={r['mesh_size']:<7} ranks {r['ranks']} {r['dofs']:6d} dofs "
+            f"{r['solves']} solves {r['newton_its']} its  dressing {r['dressing_s']:6.1f} s "
+            f"(linear {r['linear_share']:.0%}, search {r['contact_search_s']:.1f} s) jit "
+            f"{r['jit_s']:.0f} s  rss {max(r['peak_rss_mb_per_rank']):.0f} MB  "
+            f"load {r['loadavg'][0]:.1f}")  # fmt: skip
+
+
+# --------------------------------------------------------------------------------------------
+# peer
+# --------------------------------------------------------------------------------------------
+def adapt_peer(source: str, n: int) -> str:
+    """Our substitutions on the peer demo for DOLFINx 0.11 and timing: the old Newton problem
+    class under its new name, the new point-ownership signature, an n×n mesh, no plots or files
+    after the load loop, and a JSON line with the wall time and the deflection under the load
+    at P = 2000 (the demo's sign: down)."""
+    s = source.replace("from dolfinx.fem.petsc import NonlinearProblem,",
+                       "from dolfinx.fem.petsc import NewtonSolverNonlinearProblem as "
+                       "NonlinearProblem,")  # fmt: skip
+    s = s.replace("[20, 20]", f"[{n}, {n}]")
+    # 0.11: determine_point_ownership takes the candidate cells (None: all)
+    s = s.replace("mesh._cpp_object, points, 1e-6\n", "mesh._cpp_object, points, 1e-6, None\n")
+    s = s.replace("solver.report = True", "solver.report = False")
+    cut = s.index("u_P2B3 = q_func.sub(0).collapse()")
+    ndofs = "naghdi_shell_FS.dofmap.index_map.size_global * naghdi_shell_FS.dofmap.index_map_bs"
+    return (
+        "import time as _time\n_T0 = _time.perf_counter()\n"
+        + s[:cut]
+        + "if mesh.comm.rank == 0:\n    import json as _json\n"
+        + "    print('PEER ' + _json.dumps({'wall_s': _time.perf_counter() - _T0, "
+        + f"'value': float(u3_list[-1]), 'dofs': int({ndofs}), 'steps': n_step}}))\n"
+    )
+
+
+def peer(mode: str, say) -> list[dict]:
+    from benchmarks import shells as sh
+
+    n_peer = 8 if mode == "quick" else 20
+    recs: list[dict] = []
+    ref = 1.71505  # Sze et al. 2004, Table 7: w at the load, P = 2000 (as in our case)
+    try:
+        src = subprocess.run(["git", "--git-dir", str(PEER_GIT), "show", f"HEAD:{PEER_DEMO}"],
+                             capture_output=True, text=True, check=True).stdout  # fmt: skip
+    except (OSError, subprocess.CalledProcessError) as err:
+        recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells",
+                     "status": "peer unavailable", "error": str(err)[:200],
+                     "loadavg": os.getloadavg()})  # fmt: skip
+        src = None
+    if src is not None:
+        with tempfile.TemporaryDirectory() as tmp:
+            script = Path(tmp) / "peer_semicylinder.py"
+            script.write_text(adapt_peer(src, n_peer))
+            for _ in range(2):  # the first run compiles the peer's forms
+                p = subprocess.run([sys.executable, str(script)], cwd=tmp, env=_env(),
+                                   capture_output=True, text=True, timeout=1800)  # fmt: skip
+            line = [x for x in p.stdout.splitlines() if x.startswith("PEER ")]
+            if line:
+                d = json.loads(line[-1][5:])
+                recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells", "n": n_peer,
+                             "ranks": 1, **d, "reference": ref,
+                             "rel_error": abs(d["value"]) / ref - 1, "status": "ok",
+                             "commit": _peer_commit(), "loadavg": os.getloadavg()})  # fmt: skip
+            else:
+                recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells",
+                             "status": "failed", "error": (p.stderr or p.stdout)[-600:],
+                             "loadavg": os.getloadavg()})  # fmt: skip
+    for n in [8] if mode == "quick" else [16, 20]:
+        r = sh.run_one(sh.Run("sze-3.7-semicylinder", n, sh.DEFAULT_ELEMENT, "direct-5steps"))
+        r = {k: v for k, v in r.items() if k != "traceback"}
+        r["case"], r["wall_s"] = "peer-semicylinder", r.get("warm_wall_s", r["wall_s"])
+        recs.append(r | {"variant": "fenics-garment", "loadavg": os.getloadavg()})
+    for r in recs:
+        err = 100 * r.get("rel_error", math.nan)
+        say(f"  {r['variant']:16} n={r.get('n')} {r.get('status')} wall "
+            f"{r.get('wall_s', math.nan):.1f} s err {err:+.3f} %")  # fmt: skip
+    return recs
+
+
+def _peer_commit() -> str:
+    p = subprocess.run(["git", "--git-dir", str(PEER_GIT), "rev-parse", "HEAD"],
+                       capture_output=True, text=True)  # fmt: skip
+    return p.stdout.strip()
+
+
+def peer_ratio(recs: list[dict]) -> dict:
+    """Our fastest run at an error no larger than the peer's, against the peer's time."""
+    peers = [r for r in recs if r["variant"] == "fenicsx-shells" and r.get("status") == "ok"]
+    ours = [r for r in recs if r["variant"] == "fenics-garment" and r.get("status") == "ok"]
+    if not peers or not ours:
+        return {}
+    p = peers[0]
+    good = [r for r in ours if abs(r["rel_error"]) <= abs(p["rel_error"])] or ours
+    best = min(good, key=lambda r: r["wall_s"])
+    return {"peer_wall_s": p["wall_s"], "peer_error": p["rel_error"], "ours_n": best["n"],
+            "ours_wall_s": best["wall_s"], "ours_error": best["rel_error"],
+            "time_ratio": best["wall_s"] / p["wall_s"]}  # fmt: skip
+
+
+# --------------------------------------------------------------------------------------------
+# stress
+# --------------------------------------------------------------------------------------------
+def stress(say) -> list[dict]:
+    """Run the stress tests and collect outcome, time and printed measurement per test."""
+    import xml.etree.ElementTree as ET
+
+    with tempfile.TemporaryDirectory() as tmp:
+        xml = Path(tmp) / "stress.xml"
+        cmd = [sys.executable, "-m", "pytest", "-q", "-m", "stress", "-p", "no:cacheprovider",
+               "-o", "junit_logging=system-out", f"--junitxml={xml}", "tests/stress"]  # fmt: skip
+        subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True, timeout=3600)
+        recs = []
+        for tc in ET.parse(xml).getroot().iter("testcase"):
+            outcome = "passed"
+            for tag in ("failure", "error", "skipped"):
+                if tc.find(tag) is not None:
+                    outcome = "failed" if tag != "skipped" else "skipped"
+            out = tc.findtext("system-out") or ""
+            lines = [x.strip() for x in out.splitlines() if x.strip()]
+            recs.append({"case": tc.get("classname", "").split(".")[-1], "test": tc.get("name"),
+                         "status": "ok" if outcome == "passed" else outcome,
+                         "wall_s": float(tc.get("time", 0)),
+                         "measured": lines[-1][:160] if lines else "",
+                         "loadavg": os.getloadavg()})  # fmt: skip
+    say(f"  stress: {sum(r['status'] == 'ok' for r in recs)}/{len(recs)} passed")
+    return recs
+
+
+# --------------------------------------------------------------------------------------------
+def main(argv: list[str] | None = None) -> int:
+    argv = list(argv or [])
+    if argv[:1] == ["--child"]:
+        from fenics_garment._stack import MPI
+
+        rec = child(json.loads(argv[1]))
+        if MPI.COMM_WORLD.rank == 0:
+            Path(argv[2]).write_text(json.dumps(rec))
+        return 0
+    mode = "quick" if "--quick" in argv else "default"
+    parts = [a for a in argv if a in PARTS] or list(PARTS)
+    say = lambda *a: print(*a, flush=True)  # noqa: E731
+    path = RESULTS / "scenes.json"
+    data = json.loads(path.read_text()) if path.exists() else {}
+    data.setdefault("meta", {})
+    data["meta"].update({"mode": mode, "loadavg_start": list(os.getloadavg()),
+                         "note": "taken on a shared 2-core machine under load"})  # fmt: skip
+    runs = {r.get("part"): [] for r in data.get("runs", [])}
+    for r in data.get("runs", []):
+        runs[r.get("part")].append(r)
+    summary = data.setdefault("summary", {})
+    t0 = time.perf_counter()
+    two = None
+    live: list[dict] = []
+
+    def sink(rec: dict) -> None:  # keep what is measured even if a later run is stopped
+        live.append(rec)
+        partial = dict(data, runs=[*data.get("runs", []), *[dict(r, part="partial") for r in live]])
+        path.write_text(json.dumps(partial, indent=1, default=float))
+
+    global SINK
+    SINK = sink
+    if "peer" in parts:
+        say("peer")
+        runs["peer"] = peer(mode, say)
+        summary["peer"] = peer_ratio(runs["peer"])
+        for r in runs["peer"]:
+            sink(r)
+    if "growth" in parts:
+        say(f"growth ({mode}): {SIZES[mode]}")
+        recs, summary["growth"] = growth(mode, say)
+        runs["growth"] = recs
+        two = next((r for r in recs if r.get("mesh_size") == SKIP_SIZE[mode]
+                    and r["status"] == "ok"), None)  # fmt: skip
+    if "parallel" in parts:
+        say("parallel: 1 rank")
+        runs["parallel"], summary["parallel"] = parallel(mode, say, two)
+    if "skips" in parts:
+        say("skips")
+        runs["skips"], summary["skips"] = skips(mode, say, two)
+    if "stress" in parts:
+        say("stress")
+        st = stress(say)
+        (RESULTS / "stress.json").write_text(json.dumps({"meta": {"loadavg_end": list(
+            os.getloadavg())}, "runs": st}, indent=1))  # fmt: skip
+    data["runs"] = [dict(r, part=p) for p, rs in runs.items() if p for r in rs]
+    data["meta"]["total_s"] = time.perf_counter() - t0
+    RESULTS.mkdir(exist_ok=True)
+    path.write_text(json.dumps(data, indent=1, default=float))
+    say(json.dumps(summary, indent=1, default=float))
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main(sys.argv[1:]))
