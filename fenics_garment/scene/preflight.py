@@ -175,7 +175,7 @@ def mesh_resolution(built) -> None:
             f"{sc.source or sc.name}: [body.mesh_size] = {h:g} m is too coarse for the body's "
             f"curvature: its smallest radius ({where}) is {r:.3g} m, so facets would cut up to "
             f"{h * h / (8 * r) * 1e3:.1f} mm into the curved surface; use body.mesh_size <= "
-            f"{MAX_BODY_H_OVER_R * r:.3g} m (r/2)"
+            f"{math.floor(MAX_BODY_H_OVER_R * r * 1e4) / 1e4:g} m (r/2, rounded down)"
         )
 
 

@@ -24,7 +24,7 @@ name = "loose-dress"
 kind = "mannequin"
 size = "88"
 z_range = [0.55, 1.55]
-mesh_size = 0.03
+mesh_size = 0.025
 [garment]
 kind = "dress"
 fabric = "cotton"
