@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -241,7 +242,11 @@ def dress(
         q_conv = q.x.array.copy()
         st.shrink.value = target
         t0 = time.perf_counter()
-        its, reason = solver.solve()
+        if cuts >= 2:  # a step cut twice: the line search and iterations of the final solves
+            with _final_solves(solver):
+                its, reason = solver.solve()
+        else:
+            its, reason = solver.solve()
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
@@ -284,19 +289,22 @@ def dress(
     elif mu is not None:
         mu.value = pr.mu
     if pr.stage == "release":
-        _release(pr, built, solver, comm, on_step, on_checkpoint)
+        with _final_solves(solver):
+            _release(pr, built, solver, comm, on_step, on_checkpoint)
         if augmented_lagrangian is not None:
             tol, max_updates = augmented_lagrangian
-            al = uzawa.augmented_lagrangian(
-                st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
-            )
+            with _final_solves(solver):
+                al = uzawa.augmented_lagrangian(
+                    st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
+                )
             rep.al_updates = len(al.penetration) - 1
             rep.al_penetration = al.penetration
             if not al.converged:
                 raise DressingFailed(
                     rep, 0.0,
                     f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
-                    f"after {max_updates} multiplier updates",
+                    f"after {max_updates} multiplier updates" if al.penetration else
+                    "augmented Lagrangian: the solve after the first multiplier update failed",
                 )  # fmt: skip
             st.accept_step()
         rep.completed = True
@@ -335,10 +343,17 @@ def _release(
     """
     if built.regularisation.c0 == 0.0:
         return
+    _release_loop(pr, built, solver, comm, on_step, on_checkpoint)
+
+
+@contextmanager
+def _final_solves(solver: NonlinearSolver):
+    """The settings of the solves at s = 0 (release, multiplier updates): up to
+    :data:`RELEASE_MAX_IT` Newton iterations, :data:`RELEASE_LINE_SEARCH`."""
     max_it = solver.set_max_it(max(RELEASE_MAX_IT, solver.problem.solver.getTolerances()[3]))
     line_search = solver.set_line_search(RELEASE_LINE_SEARCH)
     try:
-        _release_loop(pr, built, solver, comm, on_step, on_checkpoint)
+        yield
     finally:
         solver.set_max_it(max_it)
         solver.set_line_search(line_search)
