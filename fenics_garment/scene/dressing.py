@@ -242,11 +242,7 @@ def dress(
         q_conv = q.x.array.copy()
         st.shrink.value = target
         t0 = time.perf_counter()
-        if cuts >= 2:  # a step cut twice: the line search and iterations of the final solves
-            with _final_solves(solver):
-                its, reason = solver.solve()
-        else:
-            its, reason = solver.solve()
+        its, reason = solver.solve()
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
