@@ -24,11 +24,6 @@ from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ShellModel
 
 
-def contact_body(body: BodySurface) -> search.BodySurface:
-    """The geometry layer's body (arrays + regions) as the contact search's body (AABB tree)."""
-    return search.BodySurface(body.vertices, body.triangles)
-
-
 def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
     """The body of the scene, built on rank 0 and broadcast (gmsh is deterministic but serial)."""
     b = scene.body
