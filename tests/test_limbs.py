@@ -89,18 +89,13 @@ def sleeve_run():
 
 
 @pytest.mark.slow  # 29 s of CPU; 50 s wall at load 3.5, 97 s at load 7 on the shared 2 cores
-@pytest.mark.xfail(
-    reason="known gap: the sleeve dresses (forearm −1.4 %, elbow −0.3 % vs Laplace) but every "
-    "spring-release solve fails once friction is on, so the answer keeps the spring "
-    "(final_regularisation > 0); README 'Known gaps'",
-    strict=False,
-)
 def test_sleeve_obeys_laplace_per_level(sleeve_run):
     assert sleeve_run.completed and sleeve_run.report.final_regularisation == 0.0
     checks = {c.level: c for c in cp.level_checks(sleeve_run.built, list(ARM_GIRTHS), 0.01)}
     # Interior levels (12 cm from either free edge): penalty −1.3 ℓ²/(κ̂ R²) ≈ −0.6…−0.9 %
     # (STACK.md), P1 facets of garment and arm ±0.3 % of girth each (≈ ±3 % of a 7 % hoop
-    # strain, partly cancelling), taper cos 4° −0.2 %: 4 %. Measured −2.9 % / −2.1 %.
+    # strain, partly cancelling), taper cos 4° −0.2 %: 4 %. Measured −2.9 % / −2.1 % (spring
+    # released to c = 0, μ = 0.3).
     for level in ("forearm", "elbow"):
         assert checks[level].rel_error == pytest.approx(0.0, abs=0.04), level
     # The wrist and upper-arm levels are 2.5 cm from the free edges, where the arm's stubs meet

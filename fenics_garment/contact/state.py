@@ -202,6 +202,12 @@ class ContactState:
         up against gravity) is carried on into the next step instead of restarting from zero —
         restarting let a sustained tangential load creep by μ t_N / κ_T every step. A point that
         slips keeps the elastic slip μ t_N / κ_T, so its traction stays on the Coulomb cone.
+
+        The normal part of the step always moves the anchor (u_old = u_k − elastic slip): the
+        anchor is a point on the skin. Left behind, the normal motion accumulated over the
+        dressing (2.5 mm median on the sleeve, against an elastic slip μ t_N / κ_T ≈ 0.01 mm)
+        turned into tangential "slip" (I − n⊗n)(u − u_old) wherever the faceted body's normal
+        turned by a fraction of a degree, and Newton cycled between stick and slip.
         """
         if self.friction is None:
             self.u_old.x.array[:] = self.u_k.x.array
@@ -216,7 +222,7 @@ class ContactState:
         t_n = np.maximum(self.lam.x.array - kappa_n * self.gap.x.array, 0.0)
         trial = kappa_t * np.linalg.norm(du_t, axis=1)
         scale = np.where(trial <= mu * t_n, 1.0, mu * t_n / np.maximum(trial, 1e-300))
-        self.u_old.x.array[:] += ((1.0 - scale)[:, None] * du_t).ravel()
+        self.u_old.x.array[:] = self.u_k.x.array - (scale[:, None] * du_t).ravel()
 
     def local_values(self, f: dolfinx.fem.Function) -> F64:
         """The owned point values of a quadrature Function (scalar (n,) or vector (n, 3))."""
