@@ -49,6 +49,9 @@ class DressReport:
     failures: list[tuple[float, int, int]] = field(default_factory=list)  # (target s, its, reason)
     regularisation_effect: float = float("nan")  # max |Δp| / max p when c → 0
     final_regularisation: float = 0.0  # c of the final answer [Pa/m]
+    # c·max|u − u_prev| of the last accepted solve [Pa]: bounds the force the spring took from
+    # the physical equilibrium (0 once released)
+    spring_traction: float = 0.0
     residual_atol: float = 0.0  # absolute Newton tolerance used [N] (_absolute_tolerance)
     al_updates: int = 0
     al_penetration: list[float] = field(default_factory=list)
@@ -73,6 +76,7 @@ class DressReport:
                 None if math.isnan(self.regularisation_effect) else self.regularisation_effect
             ),
             "final_regularisation_Pa_per_m": self.final_regularisation,
+            "spring_traction_max_Pa": self.spring_traction,
             "residual_atol_N": self.residual_atol,
             "augmented_lagrangian_updates": self.al_updates,
             "augmented_lagrangian_penetration_m": self.al_penetration,
@@ -246,6 +250,7 @@ def dress(
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
+            rep.spring_traction = rec.regularisation * spring_stretch(built, comm)
             st.accept_step()
             reg.accept_step(q)
             cuts = 0
@@ -355,10 +360,18 @@ def _final_solves(solver: NonlinearSolver):
         solver.set_line_search(line_search)
 
 
+def spring_stretch(built, comm: MPI.Comm) -> float:
+    """Largest displacement since the spring's anchor, max |u − u_prev| [m]: times c it bounds
+    the traction the pseudo-time spring carries [Pa]."""
+    model, reg = built.model, built.regularisation
+    u_dofs = model.Q.sub(0).collapse()[1]
+    moved = np.abs(model.q.x.array[u_dofs] - reg.q_prev.x.array[u_dofs])
+    return comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
+
+
 def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> None:
     model, contact, reg = built.model, built.contact, built.regularisation
     rep = pr.report
-    u_dofs = model.Q.sub(0).collapse()[1]
     while pr.solves < MAX_RELEASE_SOLVES:
         pr.solves += 1
         c = pr.c
@@ -373,7 +386,8 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> 
             model.q.x.scatter_forward()
             contact.state.refresh()
             pr.retries += 1
-            if pr.retries > MAX_FAILS:
+            released_once = any(step.stage == "release" for step in rep.steps)
+            if pr.retries > (MAX_FAILS if released_once else MAX_FAILS_UNRELEASED):
                 reg.c.value = rep.final_regularisation
                 return
             # the other line search next (neither wins everywhere: full steps cycle between
@@ -388,11 +402,11 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> 
                     (last * c) ** 0.5 if c < 0.999 * last else 3 * c)  # fmt: skip
             continue
         pr.retries = 0
-        moved = np.abs(model.q.x.array[u_dofs] - reg.q_prev.x.array[u_dofs])
-        moved = comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
+        moved = spring_stretch(built, comm)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
         rep.steps.append(rec)
         rep.final_regularisation = c
+        rep.spring_traction = c * moved
         rep.regularisation_effect = _max_pressure_change(contact, before, comm)
         contact.state.accept_step()
         reg.accept_step(model.q)
@@ -423,6 +437,10 @@ RELEASE_TOLERANCE = 0.01
 MIN_RATIO, MAX_RATIO = 0.1, 0.8
 C_ZERO = 1e-5
 MAX_FAILS = 8
+#: Failures in a row allowed before any release solve has converged. The cotton gilet (16,242
+#: dofs, 2 ranks) failed all 11 attempts at c = 7.7e3 … 2e5 Pa/m (with μ = 0.4 and with μ = 0
+#: alike), 75 s of a 126 s run; attempt 3 is the first raise (3c), which a folding skirt needs.
+MAX_FAILS_UNRELEASED = 3
 MAX_RELEASE_SOLVES = 40
 #: Newton iterations allowed per release solve: the cotton gilet needs up to 18 as stick and slip
 #: settle (15 made every solve below c ≈ 2e3 Pa/m fail; 30 released it to c = 0).

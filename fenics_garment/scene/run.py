@@ -17,6 +17,7 @@ One output folder per run, ``<output.folder>/<name>/``:
 
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -289,9 +290,13 @@ def run(
         f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
     effect = report.regularisation_effect
     if report.final_regularisation > 0 and not effect <= RELEASE_TOLERANCE:
+        why = ("no release solve converged" if math.isnan(effect) else
+               f"its last release changed the pressure by {effect:.2%}, more than "
+               f"{RELEASE_TOLERANCE:.0%}")  # fmt: skip
         say(f"  WARNING: the stabilising spring is not fully released: c = "
-            f"{report.final_regularisation:.3g} Pa/m remains (its last release changed the "
-            f"pressure by {effect:.2%}, more than {RELEASE_TOLERANCE:.0%})")  # fmt: skip
+            f"{report.final_regularisation:.3g} Pa/m remains ({why}); its traction is at most "
+            f"{report.spring_traction:.3g} Pa, against contact pressures up to "
+            f"{_contact_measures(built)['max_pressure_kPa'] * 1e3:.3g} Pa")  # fmt: skip
     elif report.final_regularisation > 0:
         say(f"  stabilising spring released to c = {report.final_regularisation:.3g} Pa/m "
             f"(from {built.regularisation.c0:.3g}); its last weakening changed the pressure by "
