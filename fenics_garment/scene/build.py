@@ -86,15 +86,23 @@ class Regularisation:
     contact (the body is shrunk at the start of dressing). This spring to the previous step
     removes them; it does no work at a converged equilibrium that does not move, and the
     dressing drives c to 0 on the final solve, so the answer is not biased (STACK.md: a spring
-    to the previous step, unlike one to zero, leaves the exact solution unchanged).
+    to the previous step, unlike one to zero, leaves the exact solution unchanged). Where the
+    release fails, c · :meth:`stretch` bounds the traction the spring still carries.
     """
 
     c: dolfinx.fem.Constant  # [Pa/m]
     c0: float
     q_prev: dolfinx.fem.Function
+    u_dofs: np.ndarray  # the displacement's dofs in q (collapsed once, not per step)
 
     def accept_step(self, q: dolfinx.fem.Function) -> None:
         self.q_prev.x.array[:] = q.x.array
+
+    def stretch(self, q: dolfinx.fem.Function) -> float:
+        """max |u − u_prev| over all ranks [m]."""
+        moved = np.abs(q.x.array[self.u_dofs] - self.q_prev.x.array[self.u_dofs])
+        comm = q.function_space.mesh.comm
+        return comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
 
 
 def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
@@ -104,7 +112,7 @@ def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
     v_u = ufl.split(ufl.TestFunction(model.Q))[0]
     u_prev = ufl.split(q_prev)[0]
     model.add_residual(c * ufl.dot(model.u - u_prev, v_u) * model.dx_full)
-    return Regularisation(c, c0, q_prev)
+    return Regularisation(c, c0, q_prev, model.Q.sub(0).collapse()[1])
 
 
 @dataclass

@@ -250,7 +250,7 @@ def dress(
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rep.steps.append(rec)
-            rep.spring_traction = rec.regularisation * spring_stretch(built, comm)
+            rep.spring_traction = rec.regularisation * reg.stretch(q)
             st.accept_step()
             reg.accept_step(q)
             cuts = 0
@@ -360,15 +360,6 @@ def _final_solves(solver: NonlinearSolver):
         solver.set_line_search(line_search)
 
 
-def spring_stretch(built, comm: MPI.Comm) -> float:
-    """Largest displacement since the spring's anchor, max |u − u_prev| [m]: times c it bounds
-    the traction the pseudo-time spring carries [Pa]."""
-    model, reg = built.model, built.regularisation
-    u_dofs = model.Q.sub(0).collapse()[1]
-    moved = np.abs(model.q.x.array[u_dofs] - reg.q_prev.x.array[u_dofs])
-    return comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
-
-
 def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> None:
     model, contact, reg = built.model, built.contact, built.regularisation
     rep = pr.report
@@ -402,7 +393,7 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> 
                     (last * c) ** 0.5 if c < 0.999 * last else 3 * c)  # fmt: skip
             continue
         pr.retries = 0
-        moved = spring_stretch(built, comm)
+        moved = reg.stretch(model.q)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
         rep.steps.append(rec)
         rep.final_regularisation = c
