@@ -9,11 +9,13 @@ STAMP     := $(VENV)/.installed-stamp
 NP        ?= 2
 PYTEST    := $(PY) -m pytest
 
-.PHONY: demo test test-serial test-mpi lint bench docker-check clean-venv help
+.PHONY: demo test test-serial test-mpi test-slow lint bench docker-check clean-venv help
 
 help:
 	@echo "make demo          run the main demo (creates .venv on first use)"
 	@echo "make test          run the test suite: serial, then the mpi-marked subset on $(NP) ranks"
+	@echo "                   (without the slow-marked verification runs: see test-slow)"
+	@echo "make test-slow     the slow-marked runs (scenes, stress, long benchmarks); CI runs both"
 	@echo "make lint          ruff check + format check"
 	@echo "make bench         run the benchmark suite (writes benchmarks/results/)"
 	@echo "make docker-check  build the Docker image locally and run the tests inside it"
@@ -35,10 +37,15 @@ demo: $(STAMP)
 test: test-serial test-mpi
 
 test-serial: $(STAMP)
-	$(PYTEST) -m "not mpi" tests
+	$(PYTEST) -m "not mpi and not slow" tests
 
 test-mpi: $(STAMP)
-	$(MPIEXEC) -n $(NP) $(PY) -m pytest -m mpi -p no:cacheprovider tests
+	$(MPIEXEC) -n $(NP) $(PY) -m pytest -m "mpi and not slow" -p no:cacheprovider tests
+
+# The verification runs that take 20 s to 2 min each (full scenes, load-step and mesh stress
+# tests, the long shell benchmarks): kept out of the default run's 15 minutes, run by CI after it.
+test-slow: $(STAMP)
+	$(PYTEST) -m "slow and not mpi" tests
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -17,6 +17,7 @@ import pytest
 from fenics_garment.contact import scenes
 
 
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 def test_capstan_stick_then_slip():
     mu, theta = 0.4, np.pi / 2
     sc = scenes.capstan_strip(MPI.COMM_WORLD, mu=mu, theta=theta)

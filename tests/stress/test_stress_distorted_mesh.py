@@ -30,6 +30,7 @@ def min_angle_deg(mesh) -> float:
 
 
 @pytest.mark.stress
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 @pytest.mark.parametrize("distortion, max_angle", [(0.5, 25.0), (0.8, 10.0)])
 def test_distorted_mesh(distortion, max_angle):
     sc = scenes.tight_tube(MPI.COMM_WORLD, ISO, distortion=distortion)

@@ -13,6 +13,7 @@ from fenics_garment.verification import shells
 
 
 @pytest.mark.stress
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 @pytest.mark.parametrize(
     "case, tol",
     [(shells.cantilever_end_shear, 0.005), (shells.cantilever_rollup, 0.005)],

@@ -50,6 +50,7 @@ pictures = false
 
 
 @pytest.mark.stress
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 def test_loose_dress_hangs_with_its_whole_weight_on_the_body():
     comm = MPI.COMM_WORLD
     tmp = Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))

@@ -41,6 +41,7 @@ def _mid_pressure(result) -> float:
 
 
 @pytest.mark.stress
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 @pytest.mark.parametrize("ease", [-0.12, -0.35])
 def test_garment_starting_inside_the_body(ease):
     comm = MPI.COMM_WORLD

@@ -29,6 +29,7 @@ def mindlin_ss_deflection(t_over_a: float, nu: float = 0.3) -> float:
 
 
 @pytest.mark.stress
+@pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 @pytest.mark.parametrize("ratio", [1e-2, 1e-3, 1e-4])
 def test_thin_clamped_plate(ratio):
     r = shells.square_plate(8, "clamped", thickness=ratio)
