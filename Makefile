@@ -27,7 +27,6 @@ $(PY):
 
 # Re-install only when the package metadata changes.
 $(STAMP): pyproject.toml | $(PY)
-	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e ".[dev,plot]"
 	@touch $(STAMP)
 
