@@ -332,6 +332,13 @@ class NonlinearSolver:
         self.timings.solve += dt
         return its, reason
 
+    def close(self) -> None:
+        """Destroy the SNES. Its residual and Jacobian callbacks refer back to this solver (and,
+        through the hooks, to the contact state and the body's search tree), a cycle through C
+        that Python's garbage collector cannot see: without this the objects lived until PETSc
+        finalised, after nanobind's exit check, which reported them as leaked."""
+        self.problem.solver.destroy()
+
     def residual_norm(self) -> float:
         """‖F(q)‖ at the current ``model.q`` (pre-residual hooks run, BCs applied)."""
         p = self.problem
