@@ -12,6 +12,9 @@
   the sparsity pattern reused between steps vs rebuilt (measured: cost of one rebuild × solves).
 * ``peer``: FEniCSx-Shells' Naghdi semi-cylinder demo, adapted at run time in a temporary folder
   by a few text substitutions of our own (never stored here), against our semi-cylinder case.
+* ``release``: both gilets (cotton, nylon) at garment mesh sizes around the demo's 15 mm: does
+  the dressing release its stabilising spring to c = 0 on every mesh, at what cost, and how much
+  do the region pressures move from one mesh to the next (a garment-mesh sensitivity)?
 * ``stress``: ``pytest -m stress tests/stress`` with a JUnit XML in a temporary folder; each
   test's outcome, time and printed measurement go to ``stress.json`` (the tests write nothing).
 
@@ -39,9 +42,11 @@ HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
 GILET = ROOT / "demos" / "cotton_gilet.toml"
-PARTS = ("growth", "parallel", "skips", "peer", "stress")
+PARTS = ("growth", "parallel", "skips", "peer", "release", "stress")
 SIZES = {"quick": [0.04, 0.03], "default": [0.03, 0.02, 0.014, 0.0085]}
 SKIP_SIZE = {"quick": 0.04, "default": 0.03}
+RELEASE_SIZES = {"quick": [0.015], "default": [0.014, 0.0145, 0.015, 0.0155, 0.016]}
+NYLON = ROOT / "demos" / "nylon_gilet.toml"
 SINK = None  # called with every finished record (the main loop saves scenes.json there)
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
 PEER_GIT = Path("/work/.mirror/FEniCS-Shells+fenicsx-shells/repo")
@@ -135,7 +140,14 @@ def _record(res, spec: dict, comm) -> dict:
         "linear_share": linear / dressing if dressing else None,
         "time_s": tm,
         "solver_time_s": st,
+        "scene": sm["scene"],
         "regions_mean_kPa": {r["region"]: r["mean_kPa"] for r in sm["regions"]},
+        "regions_p95_kPa": {r["region"]: r["p95_kPa"] for r in sm["regions"]},
+        "final_regularisation": sm["dressing"]["final_regularisation_Pa_per_m"],
+        "spring_traction_max_Pa": sm["dressing"]["spring_traction_max_Pa"],
+        "release_solves": sum(1 for x in steps if x["stage"] == "release"),
+        "release_its": sum(x["iterations"] for x in steps if x["stage"] == "release"),
+        "failed_attempts": len(sm["dressing"]["failed_attempts"]),
         "max_pressure_kPa": sm["max_pressure_kPa"],
         "message": sm["message"],
         "contact_force_N": sm["contact_force_N"],
@@ -285,6 +297,44 @@ def _line(r: dict) -> str:
             f"(linear {r['linear_share']:.0%}, search {r['contact_search_s']:.1f} s) jit "
             f"{r['jit_s']:.0f} s  rss {max(r['peak_rss_mb_per_rank']):.0f} MB  "
             f"load {r['loadavg'][0]:.1f}")  # fmt: skip
+
+
+def release_summary(rs: list[dict]) -> dict:
+    """Counts over one scene's meshes; costs and pressure spread over the completed runs (a
+    dressing that stopped early also has final_regularisation 0)."""
+    ok = [r for r in rs if r.get("status") == "ok"]
+    done = [r for r in ok if r["completed"]]
+    p95 = {k: [r["regions_p95_kPa"][k] for r in done] for k in ("waist", "upper_chest")}
+    return {
+        "meshes": len(rs),
+        "completed": len(done),
+        "released_to_zero": sum(r["final_regularisation"] == 0.0 for r in done),
+        "stopped": {r["mesh_size"]: r["message"] for r in ok if not r["completed"]},
+        "release_its_mean": float(np.mean([r["release_its"] for r in done])) if done else None,
+        "dressing_s_mean": float(np.mean([r["dressing_s"] for r in done])) if done else None,
+        # spread of the p95 over the meshes, relative to their mean
+        "p95_spread": {k: (max(v) - min(v)) / np.mean(v) for k, v in p95.items() if v},
+        "p95_kPa": p95,
+    }
+
+
+def release(mode: str, say) -> tuple[list[dict], dict]:
+    """Both gilets over :data:`RELEASE_SIZES`: spring released (c = 0) on how many meshes."""
+    recs, summary = [], {}
+    for scene in (GILET, NYLON):
+        rs = []
+        for h in RELEASE_SIZES[mode]:
+            r = spawn({"mesh_size": h, "scene": str(scene)})
+            tail = ""
+            if r.get("status") == "ok":
+                tail = (f"  final c {r['final_regularisation']:.3g} Pa/m, release "
+                        f"{r['release_solves']} solves / {r['release_its']} its"
+                        if r["completed"] else f"  STOPPED: {r['message']}")  # fmt: skip
+            say(_line(r) + tail)
+            rs.append(r)
+        summary[scene.stem] = release_summary(rs)
+        recs += rs
+    return recs, summary
 
 
 # --------------------------------------------------------------------------------------------
@@ -457,6 +507,9 @@ def main(argv: list[str] | None = None) -> int:
     if "skips" in parts:
         say("skips")
         runs["skips"], summary["skips"] = skips(mode, say, two)
+    if "release" in parts:
+        say(f"release ({mode}): {RELEASE_SIZES[mode]}")
+        runs["release"], summary["release"] = release(mode, say)
     if "stress" in parts:
         say("stress")
         st = stress(say)

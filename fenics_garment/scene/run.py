@@ -291,7 +291,13 @@ def run(
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
         f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
     effect = report.regularisation_effect
-    if report.final_regularisation > 0 and not effect <= RELEASE_TOLERANCE:
+    grew_only = not any(step.stage == "release" for step in report.steps)
+    if not completed and grew_only and report.final_regularisation == 0.0:
+        # stopped while the body grew: the release was never reached
+        if built.regularisation.c0 > 0:
+            say(f"  the stabilising spring (c = {built.regularisation.c0:.3g} Pa/m) was not "
+                "released: the dressing stopped before the body reached its size")  # fmt: skip
+    elif report.final_regularisation > 0 and not effect <= RELEASE_TOLERANCE:
         why = ("no release solve converged" if math.isnan(effect) else
                f"its last release changed the pressure by {effect:.2%}, more than "
                f"{RELEASE_TOLERANCE:.0%}")  # fmt: skip
