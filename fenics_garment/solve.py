@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import os
 import time
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
@@ -290,19 +291,27 @@ class NonlinearSolver:
         jctx = {"u": p.u, "jacobian": p.J, "preconditioner": p.preconditioner, "bcs": self.bcs}
         model = self.model
         timings = self.timings
+        # The SNES keeps these callbacks (in C, out of sight of Python's garbage collector): a
+        # strong reference to the solver from them would be a cycle solver → problem → SNES →
+        # callback → solver that is never freed, keeping the contact hooks and the body's
+        # search tree alive until PETSc finalises (nanobind then reported them as leaked). With
+        # a weak one the solver is freed when its user drops it, and NonlinearProblem.__del__
+        # destroys the SNES.
+        this = weakref.ref(self)
 
         def residual(snes_, x, b):
+            solver = this()
             t0 = time.perf_counter()
             dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
             dolfinx.fem.petsc.assign(x, model.q)
-            if self.hooks:
+            if solver.hooks:
                 th = time.perf_counter()
-                for hook in self.hooks:
+                for hook in solver.hooks:
                     hook()
                 timings.hooks += time.perf_counter() - th
-            self._assemble_residual(x, b)
-            if self.f_point is not None:
-                b.axpy(-float(model.load_factor.value), self.f_point)
+            solver._assemble_residual(x, b)
+            if solver.f_point is not None:
+                b.axpy(-float(model.load_factor.value), solver.f_point)
             timings.residual_evaluations += 1
             timings.residual += time.perf_counter() - t0
             norm = b.norm()
@@ -331,13 +340,6 @@ class NonlinearSolver:
         self.timings.linear_iterations += snes.getLinearSolveIterations()
         self.timings.solve += dt
         return its, reason
-
-    def close(self) -> None:
-        """Destroy the SNES. Its residual and Jacobian callbacks refer back to this solver (and,
-        through the hooks, to the contact state and the body's search tree), a cycle through C
-        that Python's garbage collector cannot see: without this the objects lived until PETSc
-        finalised, after nanobind's exit check, which reported them as leaked."""
-        self.problem.solver.destroy()
 
     def residual_norm(self) -> float:
         """‖F(q)‖ at the current ``model.q`` (pre-residual hooks run, BCs applied)."""

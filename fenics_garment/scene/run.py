@@ -284,8 +284,6 @@ def run(
     except DressingFailed as err:
         report, completed, message = err.report, False, str(err)
         say("  " + message)
-    finally:
-        solver.close()
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
