@@ -117,7 +117,7 @@ def _record(res, spec: dict, comm) -> dict:
     linear = st["solve"] - st["residual"] - st["jacobian"]
     assembly = st["residual"] + st["jacobian"] - st["hooks"]
     return {
-        "case": "gilet",
+        "case": Path(spec.get("scene", GILET)).stem,
         "variant": spec.get("variant", "default"),
         "mesh_size": spec["mesh_size"],
         "cells": sm["garment_cells"],
@@ -143,6 +143,10 @@ def _record(res, spec: dict, comm) -> dict:
         "scene": sm["scene"],
         "regions_mean_kPa": {r["region"]: r["mean_kPa"] for r in sm["regions"]},
         "regions_p95_kPa": {r["region"]: r["p95_kPa"] for r in sm["regions"]},
+        "regions_max_kPa": {r["region"]: r["max_kPa"] for r in sm["regions"]},
+        "element": sm["element"],
+        "max_penetration_over_thickness": sm["max_penetration_over_thickness"],
+        "al_updates": sm["dressing"].get("augmented_lagrangian_updates"),
         "final_regularisation": sm["dressing"]["final_regularisation_Pa_per_m"],
         "spring_traction_max_Pa": sm["dressing"]["spring_traction_max_Pa"],
         "release_solves": sum(1 for x in steps if x["stage"] == "release"),

@@ -61,3 +61,19 @@ def test_invalid_toml_and_missing_file(tmp_path):
         _load_text(tmp_path, "name = \n")
     with pytest.raises(config.SceneError, match="no such scene file"):
         config.load(tmp_path / "nope.toml")
+
+
+def test_every_bundled_scene_and_the_default_use_a_verified_element():
+    """The verified element (it passes ``verification/shells.py``) is the default and every
+    shipped scene's element; an unverified one gets a WARNING line."""
+    from fenics_garment.scene.run import element_warning
+    from fenics_garment.shell.model import DEFAULT_ELEMENT, ELEMENTS
+
+    assert config.GarmentConfig().element == DEFAULT_ELEMENT
+    assert ELEMENTS[DEFAULT_ELEMENT].verified
+    for path in sorted(DEMOS.glob("*.toml")):
+        element = config.load(path).garment.element
+        assert ELEMENTS[element].verified, f"{path.name}: {element}"
+        assert element_warning(ELEMENTS[element]) is None
+    assert "WARNING" in element_warning(ELEMENTS["P1-P1"])
+    assert set(config.ELEMENTS) <= set(ELEMENTS)

@@ -15,11 +15,14 @@ E = (λ² − 1)/2, SVK membrane (A = stiffness resultants in the local frame):
 
 * tube (free ends, S_zz = 0): E_zz = −ν_θz E, λ_z = √(1 + 2E_zz), S_θθ = E_θ h E,
   n_θθ = (λ/λ_z) S_θθ, p_m = n_θθ/R_c;
-* cap (equal biaxial): S = (A11 + A12) E, n = S, p_m = 2n/R_c;
+* cap (equal biaxial stretch): S₁ = (A11 + A12) E, S₂ = (A12 + A22) E along the two frame
+  directions, n_α = S_α, p_m = (n₁ + n₂)/R_c (Laplace's law for a membrane on a sphere; for an
+  orthotropic fabric A11 ≠ A22 and the isotropic shortcut 2(A11 + A12)E/R_c is off, e.g. 4.6 %
+  for nylon);
 * bending: the director stays radial, κ = (λ − 1)/r0 in the curved directions; the virtual
   work of the uniform moment adds p_b = D_θθ (λ − 1)/(r0² R_c) on the tube (with λ_z = 1 in
   the bending energy's area, since κ_zz = 0 the moment does no axial work) and
-  p_b = 2 (D11 + D12)(λ − 1)/(r0 R_c²) on the cap: both from dΠ/dR_c per deformed area.
+  p_b = (D11 + 2 D12 + D22)(λ − 1)/(r0 R_c²) on the cap: both from dΠ/dR_c per deformed area.
 """
 
 from __future__ import annotations
@@ -130,12 +133,15 @@ def tube_pressure(R_c: float, r0: float, s, *, warp: str = "axial", bending: boo
 
 
 def cap_pressure(R_c: float, r0: float, s, *, bending: bool = True) -> float:
-    """Exact equal-biaxial pressure of a tight shell cap [Pa]: p = 2n/R_c (+ bending)."""
+    """Exact equal-biaxial pressure of a tight shell cap [Pa]: p = (n₁ + n₂)/R_c (+ bending).
+
+    n₁ = (A11 + A12) E and n₂ = (A12 + A22) E are the membrane forces along the two frame
+    directions under the equal-biaxial Green–Lagrange strain E = (λ² − 1)/2."""
     lam = R_c / r0
     e = (lam**2 - 1) / 2
-    p = 2 * (s.A11 + s.A12) * e / R_c
+    p = (s.A11 + 2 * s.A12 + s.A22) * e / R_c
     if bending:
-        p += 2 * (s.D11 + s.D12) * (lam - 1) / (r0 * R_c**2)
+        p += (s.D11 + 2 * s.D12 + s.D22) * (lam - 1) / (r0 * R_c**2)
     return float(p)
 
 
@@ -272,17 +278,21 @@ def dress(scene: Scene, steps=(0.5, 0.0)) -> DressReport:
 
 
 def mid_pressure(scene: Scene, where=None) -> float:
-    """Contact force over deformed area, Σ t_N w dA / Σ J_s w dA, over the contact points in
-    the region far from the edges (all ranks).
+    """Contact force over deformed area, Σ t_N w dA / Σ J_s w dA, over the contact points of
+    the cells in the region far from the edges (all ranks).
 
     Tube: z < L/4 (mid-length; the free end is at z = L/2). Cap: within half the half-angle of
-    the pole.
+    the pole. A cell is in the region when the mean position of its contact points is, and then
+    all its points are: a band that cut through a row of cells and kept only some of each
+    cell's points would weight that row's points unevenly (measured +1.13 % on a 10×5 tube).
+    ``where(x)`` selects on those cell positions (shape (cells, 3)).
     """
     st = scene.state
     t_n = scene.contact.traction
     force = pressure.point_forces(st, t_n)
     area = pressure.point_areas(st, scene.contact.area_stretch())
-    x = pressure.positions(st)
+    per_cell = len(st.weights)
+    x = pressure.positions(st).reshape(-1, per_cell, 3).mean(axis=1)
     if where is None:
         if "L" in scene.extra:
             sel = x[:, 2] < scene.extra["L"] / 4
@@ -291,6 +301,7 @@ def mid_pressure(scene: Scene, where=None) -> float:
             sel = ang < scene.extra["half_angle"] / 2
     else:
         sel = where(x)
+    sel = np.repeat(sel, per_cell)
     comm = scene.model.geometry.mesh.comm
     return comm.allreduce(force[sel].sum(), op=MPI.SUM) / comm.allreduce(
         area[sel].sum(), op=MPI.SUM

@@ -37,10 +37,35 @@ def max_penetration(state: ContactState) -> float:
     return state.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
-def update_multiplier(state: ContactState, kappa: float) -> None:
-    """λ ← ⟨λ − κ g⟩₊ at every contact point (g from the last refresh = the converged state)."""
+#: Largest observed contraction ρ of a point's penetration that :func:`update_multiplier`
+#: extrapolates (the step on λ is then at most 1/(1 − ρ) = 10× the plain Uzawa step).
+MAX_CONTRACTION = 0.9
+
+
+def update_multiplier(
+    state: ContactState, kappa: float, previous_gap: np.ndarray | None = None
+) -> None:
+    """λ ← ⟨λ − κ g / (1 − ρ)⟩₊ at every contact point (g from the last refresh = the converged
+    state), with ρ = g/g_prev the point's observed contraction (0 on the first update).
+
+    ρ = 0 is the plain Uzawa step. Where a point's penetration falls only slowly from one update
+    to the next — the structure around it is much stiffer than the penalty that point carries,
+    e.g. a free-edge vertex of a P2 garment with a small tributary weight, whose penetration
+    on the cotton gilet fell by only 5 % per update — the step is extrapolated: for one point
+    on a spring K with the penalty κ', g_{k+1} = ρ g_k with ρ = K/(K + κ'), and the step
+    κ' g_k/(1 − ρ) = (K + κ') g_k lands on g = 0 (Aitken's Δ² extrapolation of the multiplier
+    sequence). ρ is used only where the point penetrated both times and less now, and is capped
+    at :data:`MAX_CONTRACTION`.
+    """
+    g = state.gap.x.array
+    gain = np.ones_like(g)
+    if previous_gap is not None:
+        both = (g < 0.0) & (previous_gap < g)
+        rho = np.zeros_like(g)
+        rho[both] = np.minimum(g[both] / previous_gap[both], MAX_CONTRACTION)
+        gain = 1.0 / (1.0 - rho)
     lam = state.lam.x.array
-    lam[:] = np.maximum(0.0, lam - kappa * state.gap.x.array)
+    lam[:] = np.maximum(0.0, lam - kappa * gain * g)
     state.lam.x.scatter_forward()
 
 
@@ -57,6 +82,7 @@ def augmented_lagrangian(
     ``solve()`` returns (Newton iterations, SNES reason), e.g. ``NonlinearSolver.solve``.
     """
     report = UzawaReport()
+    previous = None
     for _ in range(max_updates + 1):
         its, reason = solve()
         report.newton_iterations.append(its)
@@ -67,5 +93,7 @@ def augmented_lagrangian(
         if pen <= tol:
             report.converged = True
             return report
-        update_multiplier(state, kappa)
+        gap = state.gap.x.array.copy()
+        update_multiplier(state, kappa, previous)
+        previous = gap
     return report

@@ -78,7 +78,7 @@ class GarmentConfig:
     fabric: str = "cotton"
     fabric_overrides: dict[str, float] = field(default_factory=dict)  # e.g. thickness [m]
     mesh_size: float = 0.03  # target element size [m]
-    element: str = "P2B-P2"
+    element: str = "P2B-P2B"  # the verified element (shell.model.DEFAULT_ELEMENT)
     side: str = "left"  # stocking leg
 
 
@@ -94,8 +94,8 @@ class PhysicsConfig:
 
     gravity: bool = True
     friction: float = MU_SKIN_COTTON
-    contact: str = "penalty"  # penalty | augmented-lagrangian
-    tolerance: float = 1e-4  # augmented Lagrangian: max penetration [m]
+    contact: str = "augmented-lagrangian"  # penalty | augmented-lagrangian
+    tolerance: float = 0.01  # augmented Lagrangian: max penetration / garment thickness
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
     max_updates: int = 8  # augmented-Lagrangian multiplier updates
 
@@ -156,7 +156,7 @@ EASE_LEVELS = {
 }
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
-ELEMENTS = ("P2B-P2", "P2-P2", "P1-P1")
+ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -314,7 +314,8 @@ def _check(s: Scene) -> None:
         _require(ok, src, f"garment.fabric_overrides.{k}", f"must be {bound}, got {v}")
     _require(0 <= p.friction <= 2, src, "physics.friction", f"must lie in [0, 2], got {p.friction}")
     _one_of(p.contact, CONTACT_METHODS, src, "physics.contact")
-    _require(p.tolerance > 0, src, "physics.tolerance", f"must be positive, got {p.tolerance}")
+    _require(0 < p.tolerance <= 1, src, "physics.tolerance",
+             f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")
     _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")
     _require(p.max_updates >= 0, src, "physics.max_updates", "must be >= 0")
     _require(d.steps >= 1, src, "dressing.steps", f"must be >= 1, got {d.steps}")

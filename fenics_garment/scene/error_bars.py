@@ -18,7 +18,8 @@ does not cross a band boundary).
 
 from __future__ import annotations
 
-from dataclasses import replace
+import math
+from dataclasses import asdict, dataclass, replace
 from pathlib import Path
 
 from fenics_garment import output, units
@@ -33,6 +34,55 @@ STATS = ("mean", "p95", "max")
 def richardson_error(fine: float, coarse: float, rate: float = RATE) -> float:
     """|Q_h − Q_2h| / (2^r − 1): the estimated error of the fine value (module doc)."""
     return abs(fine - coarse) / (2.0**rate - 1.0)
+
+
+@dataclass(frozen=True)
+class Convergence:
+    """A statistic on three garment meshes h₁ > h₂ > h₃ of constant ratio r = h₁/h₂ = h₂/h₃.
+
+    ``order``: the observed order p = ln|(Q₁ − Q₂)/(Q₂ − Q₃)| / ln r (nan when the differences
+    change sign: not yet in the asymptotic range); ``extrapolated``: Q₃ + (Q₃ − Q₂)/(r^p − 1);
+    ``error``: the estimated error of each level, the grid convergence index
+    F_s |Q_k − Q_{k−1}|/(r^p − 1) with F_s = 1.25 (Roache, "Perspective: a method for uniform
+    reporting of grid refinement studies", J. Fluids Eng. 116 (1994) 405–413), with p clipped to
+    [:data:`MIN_ORDER`, :data:`MAX_ORDER`] and, outside the asymptotic range, F_s = 3 and
+    p = :data:`MIN_ORDER` (Roache's two-grid safety factor, conservative); the coarsest level's
+    error is its distance to the extrapolated value plus the finest level's error.
+    """
+
+    sizes: tuple[float, ...]
+    values: tuple[float, ...]
+    order: float
+    extrapolated: float
+    error: tuple[float, ...]
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+MIN_ORDER, MAX_ORDER = 0.5, 3.0
+
+
+def three_level(sizes: list[float], values: list[float]) -> Convergence:
+    """The observed order, Richardson extrapolation and error bars of ``values`` on the meshes
+    ``sizes`` (coarse to fine, the last three used; see :class:`Convergence`)."""
+    (h1, h2, h3), (q1, q2, q3) = sizes[-3:], values[-3:]
+    r = (h1 / h2 * h2 / h3) ** 0.5
+    d21, d32 = q2 - q1, q3 - q2
+    asymptotic = d21 * d32 > 0 and abs(d32) < abs(d21)
+    if asymptotic:
+        order = math.log(abs(d21 / d32)) / math.log(r)
+        p, fs = min(max(order, MIN_ORDER), MAX_ORDER), 1.25
+    else:
+        order, p, fs = float("nan"), MIN_ORDER, 3.0
+    if d32 == 0.0:
+        order, p, fs = float("nan"), MAX_ORDER, 1.25
+    extra = q3 + d32 / (r**p - 1.0) if asymptotic else q3
+    e3 = fs * abs(d32) / (r**p - 1.0)
+    e2 = fs * abs(d21) / (r**p - 1.0)
+    e1 = abs(q1 - extra) + e3
+    errs = [abs(q - extra) + e3 for q in values[:-3]]
+    return Convergence(tuple(sizes), tuple(values), order, extra, (*errs, e1, e2, e3))
 
 
 def comfort_range(p_kpa: float, err_kpa: float) -> str:

@@ -38,6 +38,7 @@ from fenics_garment.scene.dressing import (
     dress,
 )
 from fenics_garment.shell.energy import membrane_forces
+from fenics_garment.shell.model import DEFAULT_ELEMENT
 from fenics_garment.solve import NonlinearSolver
 
 #: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
@@ -170,11 +171,13 @@ def _contact_measures(built) -> dict:
     a = cpressure.point_areas(st, c.area_stretch())
     p = c.pressure_values()
     p_max = comm.allreduce(float(p.max()) if len(p) else 0.0, op=MPI.MAX)
+    pen = max(uzawa.max_penetration(st), 0.0)
     return {
         "contact_area_garment_m2": comm.allreduce(float(a[f > 0].sum()), op=MPI.SUM),
         "contact_force_N": comm.allreduce(float(f.sum()), op=MPI.SUM),
         "max_pressure_kPa": p_max * 1e-3,
-        "max_penetration_m": max(uzawa.max_penetration(st), 0.0),
+        "max_penetration_m": pen,
+        "max_penetration_over_thickness": pen / built.model.stiffness.thickness,
     }
 
 
@@ -190,6 +193,15 @@ def contact_points_by_region(built) -> tuple[np.ndarray, np.ndarray, np.ndarray]
     local = (built.body.region[faces], p[on], a[on])
     parts = comm.allgather(local)
     return tuple(np.concatenate([q[k] for q in parts]) for k in range(3))
+
+
+def element_warning(variant) -> str | None:
+    """The WARNING line for a shell element that has not passed the verification table."""
+    if variant.verified:
+        return None
+    return (f"WARNING: element {variant.name} is a draft option, not verified: it locks in "
+            f"bending on thin shells (README, 'Shell element'); the verified element is "
+            f"{DEFAULT_ELEMENT}")  # fmt: skip
 
 
 def run(
@@ -239,6 +251,8 @@ def run(
     times["geometry_and_model"] = time.perf_counter() - t0
     say(f"  garment: {len(built.garment.cells)} cells, element {scene.garment.element}, "
         f"{built.dofs} dofs ({times['geometry_and_model']:.1f} s)")  # fmt: skip
+    if (warning := element_warning(built.model.variant)) is not None:
+        say("  " + warning)
     if meta is None:
         preflight.check_built(built)
 
@@ -265,7 +279,8 @@ def run(
 
     d = scene.dressing
     p = scene.physics
-    al = (p.tolerance, p.max_updates) if p.contact == "augmented-lagrangian" else None
+    h = built.model.stiffness.thickness
+    al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
     t0 = time.perf_counter()
     progress = None
     if meta is not None:
@@ -335,6 +350,7 @@ def run(
         "garment": scene.garment.kind,
         "fabric": scene.garment.fabric,
         "element": scene.garment.element,
+        "element_verified": built.model.variant.verified,
         "dofs": built.dofs,
         "garment_cells": len(built.garment.cells),
         "body_triangles": len(built.body.triangles),
