@@ -7,7 +7,13 @@ t_N = ⟨λ − κ g⟩₊, see :func:`fenics_garment.contact.terms.normal_tract
 
 until max(−g) ≤ tol. κ stays where the penalty is well conditioned (κ̂ ≈ 1–10), so the
 penetration error of the penalty (≈ −1.3 E h/(κ R²) in relative pressure, STACK.md) is removed
-without raising κ.
+without raising κ — unless the penetration stalls: given the form's penalty Constant
+(``stiffen=``), κ is raised ×:data:`STIFFEN_FACTOR` whenever an update reduced the largest
+penetration by less than :data:`SUFFICIENT_DECREASE` (the multiplier method's penalty update,
+Bertsekas, *Constrained Optimization and Lagrange Multiplier Methods*, Academic Press 1982,
+§2.2; Nocedal & Wright, *Numerical Optimization*, 2nd ed. 2006, Alg. 17.4). On the cotton gilet
+at 35 mm one free-edge vertex at the armpit wrapped the body's shoulder rim and its penetration
+went 188 → 169 → 74 → 112 → 116 → 114 µm at fixed κ.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ class UzawaReport:
     converged: bool = False
     penetration: list[float] = field(default_factory=list)
     newton_iterations: list[int] = field(default_factory=list)
+    kappa: list[float] = field(default_factory=list)  # the penalty of each pass [Pa/m]
 
 
 def max_penetration(state: ContactState) -> float:
@@ -36,6 +43,9 @@ def max_penetration(state: ContactState) -> float:
     local = float(-g.min()) if len(g) else -np.inf
     return state.mesh.comm.allreduce(local, op=MPI.MAX)
 
+
+#: Penalty raise of a stalled update, the decrease that counts as progress, and the most raises.
+STIFFEN_FACTOR, SUFFICIENT_DECREASE, MAX_STIFFEN = 10.0, 0.25, 3
 
 #: Largest observed contraction ρ of a point's penetration that :func:`update_multiplier`
 #: extrapolates (the step on λ is then at most 1/(1 − ρ) = 10× the plain Uzawa step).
@@ -76,24 +86,55 @@ def augmented_lagrangian(
     *,
     tol: float,
     max_updates: int = 20,
+    stiffen=None,
+    unknown=None,
 ) -> UzawaReport:
     """Solve, update λ, repeat until the penetration is ≤ ``tol`` [m] (e.g. 1 % of h).
 
     ``solve()`` returns (Newton iterations, SNES reason), e.g. ``NonlinearSolver.solve``.
+    ``stiffen``: the penalty ``fem.Constant`` of the contact form (its value is ``kappa``);
+    when given, a stalled update raises it (module doc) and it keeps its last value.
+    ``unknown``: the model's unknown Function; when given, a failed solve puts it, λ and κ back
+    to the last converged pass (so what is reported is a converged state, not the iterate
+    Newton gave up on).
     """
     report = UzawaReport()
     previous = None
+    raises = 0
+    last = None
     for _ in range(max_updates + 1):
         its, reason = solve()
         report.newton_iterations.append(its)
+        report.kappa.append(kappa)
         if reason <= 0:
+            if last is not None and unknown is not None:
+                _put_back(state, unknown, stiffen, *last)
             return report
+        if unknown is not None:
+            last = (unknown.x.array.copy(), state.lam.x.array.copy(), kappa)
         pen = max_penetration(state)
         report.penetration.append(pen)
         if pen <= tol:
             report.converged = True
             return report
+        stalled = len(report.penetration) > 1 and pen > SUFFICIENT_DECREASE * report.penetration[-2]
+        if stiffen is not None and stalled and raises < MAX_STIFFEN:
+            raises += 1
+            kappa *= STIFFEN_FACTOR
+            stiffen.value = kappa
+            previous = None  # the contraction seen at the old κ says nothing about the new one
         gap = state.gap.x.array.copy()
         update_multiplier(state, kappa, previous)
         previous = gap
     return report
+
+
+def _put_back(state: ContactState, unknown, stiffen, q, lam, kappa: float) -> None:
+    """Restore a converged pass: the unknown, the multipliers and the penalty."""
+    unknown.x.array[:] = q
+    unknown.x.scatter_forward()
+    state.lam.x.array[:] = lam
+    state.lam.x.scatter_forward()
+    if stiffen is not None:
+        stiffen.value = kappa
+    state.refresh()

@@ -55,6 +55,7 @@ class DressReport:
     residual_atol: float = 0.0  # absolute Newton tolerance used [N] (_absolute_tolerance)
     al_updates: int = 0
     al_penetration: list[float] = field(default_factory=list)
+    al_kappa: list[float] = field(default_factory=list)  # the penalty of each pass [Pa/m]
     completed: bool = False
 
     @property
@@ -80,6 +81,7 @@ class DressReport:
             "residual_atol_N": self.residual_atol,
             "augmented_lagrangian_updates": self.al_updates,
             "augmented_lagrangian_penetration_m": self.al_penetration,
+            "augmented_lagrangian_kappa_Pa_per_m": self.al_kappa,
             "completed": self.completed,
         }
 
@@ -156,6 +158,7 @@ class Progress:
     mu: float = 0.0
     spring: float = 0.0  # c·max|u − u_prev| of the last accepted release solve [Pa]
     solves: int = 0
+    kappa: float = 0.0  # the contact penalty after the multiplier updates (0: the scene's) [Pa/m]
 
     def as_dict(self) -> dict:
         r = self.report
@@ -228,6 +231,8 @@ def dress(
         st.accept_step()
     else:
         pr, rep = resume, resume.report
+        if pr.kappa > 0.0:  # the multiplier updates raised the penalty (uzawa: stiffen)
+            contact.kappa.value = pr.kappa
         st.shrink.value = pr.shrink
         reg.c.value = pr.c
         st.refresh()
@@ -296,10 +301,13 @@ def dress(
             tol, max_updates = augmented_lagrangian
             with _final_solves(solver):
                 al = uzawa.augmented_lagrangian(
-                    st, float(contact.kappa.value), solver.solve, tol=tol, max_updates=max_updates
-                )
+                    st, float(contact.kappa.value), solver.solve, tol=tol,
+                    max_updates=max_updates, stiffen=contact.kappa, unknown=q,
+                )  # fmt: skip
             rep.al_updates = len(al.penetration) - 1
             rep.al_penetration = al.penetration
+            rep.al_kappa = al.kappa
+            pr.kappa = float(contact.kappa.value)
             if not al.converged:
                 raise DressingFailed(
                     rep, 0.0,
