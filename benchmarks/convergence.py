@@ -74,8 +74,10 @@ def run_scene(stem: str, h0: float, n: int, say) -> list[dict]:
 
 def analyse(recs: list[dict]) -> dict:
     """Per region and statistic: values per level, observed order, extrapolation, errors."""
-    ok = [r for r in recs if r["status"] == "ok" and r["completed"]]
+    ok = [r for r in recs if r["status"] == "ok"]  # incomplete ones are flagged, not dropped
     out: dict = {"sizes": [r["mesh_size"] for r in ok], "dofs": [r["dofs"] for r in ok],
+                 "completed": [r["completed"] for r in ok],
+                 "penetration_over_thickness": [r["max_penetration_over_thickness"] for r in ok],
                  "regions": {}}  # fmt: skip
     if len(ok) < 3:
         out["note"] = f"only {len(ok)} completed levels: no three-level estimate"
