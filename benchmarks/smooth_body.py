@@ -61,7 +61,8 @@ def last_ratios(rec: dict) -> list[float]:
 
 
 def row(r: dict) -> str:
-    head = f"{r['scene_name']:6} {r['body_surface']:7} h={r['mesh_size']:<6} body={r['body_mesh_size']:<6}"
+    head = (f"{r['scene_name']:6} {r['body_surface']:7} h={r['mesh_size']:<6} "
+            f"body={r['body_mesh_size']:<6}")  # fmt: skip
     if r.get("status") != "ok":
         return f"{head} FAILED {r.get('error', '')[-120:]!r}"
     lr = last_ratios(r)
