@@ -12,6 +12,7 @@ Each run is one ``mpiexec -n 2`` child of :func:`benchmarks.scenes.spawn` (spec 
 every run) and prints the tables; times are on a shared 2-core machine (loadavg recorded).
 
     python -m benchmarks.smooth_body [--quick] [runs] [refine]
+    python -m benchmarks.smooth_body row FOLDER ...   (the underbust row of run folders' maps)
 """
 
 from __future__ import annotations
@@ -90,7 +91,27 @@ def refinement_table(data: dict, h: float) -> dict:
     return out
 
 
+def underbust_row(folder: str, z: float = 1.215, half: float = 0.012) -> dict:
+    """Spottiness of the body pressure along the front underbust crease of a gilet run folder
+    (``<run>/<scene>/body_pressure.vtu``): the largest vertex pressure in each 1 cm of width
+    (|x| < 10 cm, front y < 0, |z − z_row| < ``half``); a row of spots has max/min ≫ 1.
+    ``z``: the row's height on the size-88 mannequin (the peak of the front median profile)."""
+    import meshio
+
+    m = meshio.read(f"{folder}/body_pressure.vtu")
+    x, p = m.points, m.point_data["contact_pressure"]
+    band = (x[:, 1] < 0) & (np.abs(x[:, 2] - z) < half) & (np.abs(x[:, 0]) < 0.10)
+    mx = np.array([p[band & (np.abs(x[:, 0] - c) < 0.005)].max()
+                   for c in np.arange(-0.095, 0.10, 0.01)])  # fmt: skip
+    return {"mean_kPa": mx.mean() * 1e-3, "min_kPa": mx.min() * 1e-3, "max_kPa": mx.max() * 1e-3,
+            "max_over_min": mx.max() / mx.min(), "cv": mx.std() / mx.mean()}  # fmt: skip
+
+
 def main(argv: list[str]) -> int:
+    if argv[:1] == ["row"]:  # python -m benchmarks.smooth_body row RUN_FOLDER/cotton-gilet ...
+        for folder in argv[1:]:
+            print(folder, json.dumps(underbust_row(folder)))
+        return 0
     mode = "quick" if "--quick" in argv else "default"
     parts = [a for a in argv if a in ("runs", "refine")] or ["runs", "refine"]
     data = _load()

@@ -214,3 +214,27 @@ def test_laplace_tube_on_the_smooth_body():
           f"Newton its {rep.iterations}; penetration {pen:.2%} of h")  # fmt: skip
     assert abs(p / ref - 1) < 0.01
     assert al.penetration[-1] <= 0.01 * h
+
+
+@pytest.mark.slow
+def test_tube_scene_on_the_smooth_body(tmp_path):
+    """``demos/tube_on_cylinder.toml`` with ``[physics] body_surface = "smooth"``: the whole scene
+    (dressing, release) completes and the mid-tube pressure obeys Laplace's law to 2 %, the
+    tolerance of the faceted scene's test (tests/test_scene_run.py)."""
+    from dataclasses import replace
+    from pathlib import Path
+
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    s = config.load(Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml")
+    s = replace(s, physics=replace(s.physics, body_surface="smooth"),
+                output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
+    res = run(s, tmp_path, quiet=True)
+    assert res.completed and res.report.final_regularisation == 0.0
+    import test_scene_run as faceted  # the same reference and the same measurement
+
+    p, ref = faceted._mid_pressure(res), faceted._laplace(res)
+    print(f"\ntube scene, smooth body: p = {p:.2f} Pa, Laplace {ref:.2f} Pa, "
+          f"error {100 * (p / ref - 1):+.3f} %")  # fmt: skip
+    assert p == pytest.approx(ref, rel=0.02)

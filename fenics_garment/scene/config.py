@@ -98,7 +98,7 @@ class PhysicsConfig:
     tolerance: float = 1e-4  # augmented Lagrangian: max penetration [m]
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
     max_updates: int = 8  # augmented-Lagrangian multiplier updates
-    body_surface: str = "faceted"  # faceted | smooth (contact.smooth: C² IMLS distance)
+    body_surface: str = "smooth"  # smooth (contact.smooth: C² IMLS distance) | faceted
 
 
 @dataclass(frozen=True)
