@@ -12,6 +12,7 @@ Each run is one ``mpiexec -n 2`` child of :func:`benchmarks.scenes.spawn` (spec 
 every run) and prints the tables; times are on a shared 2-core machine (loadavg recorded).
 
     python -m benchmarks.smooth_body [--quick] [runs] [refine]
+    python -m benchmarks.smooth_body table            (the stored record as Markdown tables)
     python -m benchmarks.smooth_body row FOLDER ...   (the underbust row of run folders' maps)
 """
 
@@ -91,6 +92,42 @@ def refinement_table(data: dict, h: float) -> dict:
     return out
 
 
+def markdown(data: dict) -> str:
+    """The runs as a Markdown table, then the body-refinement p95 changes per region."""
+    lines = ["| gilet | body | garment h | body h | outcome | solves | Newton its | failed tries "
+             "| last-iteration ratio: median / max | search / dressing [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    for r in sorted(data["runs"], key=_key):
+        if r.get("status") != "ok":
+            lines.append(f"| {r['scene_name']} | {r['body_surface']} | {r['mesh_size']} | "
+                         f"{r['body_mesh_size']} | run failed | | | | | |")  # fmt: skip
+            continue
+        lr = last_ratios(r)
+        state = (
+            "released to c = 0"
+            if r["completed"] and r["final_regularisation"] == 0
+            else (
+                f"spring kept (c = {r['final_regularisation']:.2g})"
+                if r["completed"]
+                else "stalled"
+            )
+        )
+        lines.append(f"| {r['scene_name']} | {r['body_surface']} | {r['mesh_size'] * 1e3:g} mm | "
+                     f"{r['body_mesh_size'] * 1e3:g} mm | {state} | {r['solves']} | "
+                     f"{r['newton_its']} | {r['failed_attempts']} | {np.median(lr):.1e} / "
+                     f"{max(lr):.1e} | {r['contact_search_s']:.0f} / "
+                     f"{r['dressing_s']:.0f} |")  # fmt: skip
+    ref = data.get("refinement_p95_change_percent", {})
+    if ref:
+        regions = sorted({k for v in ref.values() for k in v})
+        lines += ["", "| p95 change, body 15 → 7.5 mm [%] | " + " | ".join(regions) + " |",
+                  "|---|" + "---|" * len(regions)]  # fmt: skip
+        for case, v in ref.items():
+            cells = [f"{v[k]:+.1f}" if k in v else "" for k in regions]
+            lines.append(f"| {case} | " + " | ".join(cells) + " |")
+    return "\n".join(lines)
+
+
 def underbust_row(folder: str, z: float = 1.215, half: float = 0.012) -> dict:
     """Spottiness of the body pressure along the front underbust crease of a gilet run folder
     (``<run>/<scene>/body_pressure.vtu``): the largest vertex pressure in each 1 cm of width
@@ -108,6 +145,9 @@ def underbust_row(folder: str, z: float = 1.215, half: float = 0.012) -> dict:
 
 
 def main(argv: list[str]) -> int:
+    if argv[:1] == ["table"]:  # print the stored record
+        print(markdown(_load()))
+        return 0
     if argv[:1] == ["row"]:  # python -m benchmarks.smooth_body row RUN_FOLDER/cotton-gilet ...
         for folder in argv[1:]:
             print(folder, json.dumps(underbust_row(folder)))
@@ -127,8 +167,7 @@ def main(argv: list[str]) -> int:
                 run_one(data, name, surface, SIZES[mode][0], BODY / 2)
     data["refinement_p95_change_percent"] = refinement_table(data, SIZES["quick"][0])
     _save(data)
-    print("\n".join(row(r) for r in data["runs"]))
-    print(json.dumps(data["refinement_p95_change_percent"], indent=1))
+    print(markdown(data))
     return 0
 
 
