@@ -80,6 +80,10 @@ def child(spec: dict) -> dict:
         phys = replace(phys, friction=0.0)
     if variant == "gravity-off":
         phys = replace(phys, gravity=False)
+    if "body_surface" in spec:  # benchmarks/smooth_body.py
+        phys = replace(phys, body_surface=spec["body_surface"])
+    if "body_mesh_size" in spec:
+        s = replace(s, body=replace(s.body, mesh_size=spec["body_mesh_size"]))
     s = replace(s, garment=g, physics=phys,
                 output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
     original = scene_build.build
@@ -151,6 +155,10 @@ def _record(res, spec: dict, comm) -> dict:
         "spring_traction_max_Pa": sm["dressing"]["spring_traction_max_Pa"],
         "release_solves": sum(1 for x in steps if x["stage"] == "release"),
         "release_its": sum(x["iterations"] for x in steps if x["stage"] == "release"),
+        "body_surface": spec.get("body_surface"),
+        "body_mesh_size": spec.get("body_mesh_size"),
+        # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve
+        "final_ratios": [(x["stage"], x["iterations"], x.get("final_ratios")) for x in steps],
         "failed_attempts": len(sm["dressing"]["failed_attempts"]),
         "max_pressure_kPa": sm["max_pressure_kPa"],
         "message": sm["message"],

@@ -111,7 +111,7 @@ def test_broad_phase_skips_far_points_exactly(sphere):
     bp.query(sphere, x)
     assert bp.skipped_fraction == 0.0
     x1 = x + 1e-3 * rng.normal(size=x.shape)
-    d1, n1 = bp.query(sphere, x1)
+    d1, n1, _ = bp.query(sphere, x1)
     exact = sphere.closest(x1)
     near = exact.distance < 0.01
     assert 0.5 < bp.skipped_fraction < 1.0

@@ -43,6 +43,7 @@ def test_bundled_scenes_load(name):
         ("[physics]\ngravity = 1\n", "physics.gravity", "must be a boolean"),
         ("[physics]\ncontact = 'penalti'\n", "physics.contact", "did you mean 'penalty'"),
         ("[physics]\nfriction = -0.1\n", "physics.friction", "must lie in [0, 2]"),
+        ("[physics]\nbody_surface = 'smoth'\n", "physics.body_surface", "did you mean 'smooth'"),
         ("[garment]\nmesh_size = 0\n", "garment.mesh_size", "must be positive"),
         ("[garment]\nkind = 'tube'\n", "garment.kind", "needs a cylinder body"),
     ],

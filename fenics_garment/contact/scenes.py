@@ -169,13 +169,15 @@ def tight_tube(
     n_body_z: int = 4,
     distortion: float = 0.0,
     options: dict | None = None,
+    surface: type[BodySurface] = BodySurface,
 ) -> Scene:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
 
     ``n`` = (cells around the quarter circle, cells along the half length); the body cylinder
     (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along. ``distortion`` moves the
     interior nodes within the surface by up to that fraction of a cell (pseudo-random, fixed):
-    the geometry stays exact, the triangles get distorted.
+    the geometry stays exact, the triangles get distorted. ``surface``: the body's class
+    (:class:`BodySurface`, faceted, or :class:`fenics_garment.contact.smooth.SmoothBody`).
     """
     mesh = parametric_surface_mesh(
         comm, lambda t, z: np.vstack([r0 * np.cos(t), r0 * np.sin(t), z]),
@@ -187,7 +189,7 @@ def tight_tube(
         mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
     )
     model = ShellModel(geo, material, element=element)
-    body = BodySurface(*cylinder(R, -L, L, n_body, n_body_z))
+    body = surface(*cylinder(R, -L, L, n_body, n_body_z))
     contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
     bcs = (
         shell_bcs.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), 0)
@@ -217,6 +219,7 @@ def tight_cap(
     element: str | None = None,
     n_body: int = 160,
     options: dict | None = None,
+    surface: type[BodySurface] = BodySurface,
 ) -> Scene:
     """A spherical cap (a cube-sphere face patch, |x/z|, |y/z| ≤ tan(half_angle)) of rest radius
     r0 on a rigid sphere of radius R; its edge follows the exact solution u = (λ(s) − 1)X, θ = 0,
@@ -230,7 +233,7 @@ def tight_cap(
     mesh = parametric_surface_mesh(comm, cube_sphere, (-t, t), (-t, t), (n, n))
     geo = ShellGeometry.from_mesh(mesh, warp=_warp_function(mesh, "x"), outward=lambda x: x)
     model = ShellModel(geo, material, element=element)
-    body = BodySurface(*sphere_patch(R, np.pi / 4, n_body))
+    body = surface(*sphere_patch(R, np.pi / 4, n_body))
     contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
     # edge: u = (λ − 1) X with a Function value, θ = 0
     Vu, _ = model.Q.sub(0).collapse()

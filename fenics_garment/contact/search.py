@@ -57,12 +57,15 @@ class ClosestPoints:
         point: closest point on the surface, shape (n, 3).
         face: index of the triangle holding it, shape (n,).
         normal: unit contact normal (outward, smoothed as chosen), shape (n, 3).
+        hessian: the distance's Hessian, shape (n, 3, 3), for a smooth body
+            (:class:`fenics_garment.contact.smooth.SmoothBody`); None for the faceted one.
     """
 
     distance: F64
     point: F64
     face: I64
     normal: F64
+    hessian: F64 | None = None
 
 
 class BodySurface:
@@ -75,6 +78,9 @@ class BodySurface:
         keep: optional (m,) boolean mask of the triangles searched (see :func:`reach_mask`);
             the others stay in the normals but not in the tree. ``dropped`` counts them.
     """
+
+    #: the distance is the faceted one (its Hessian is not passed on to the contact terms)
+    smooth = False
 
     def __init__(
         self, vertices: npt.ArrayLike, triangles: npt.ArrayLike, keep: npt.ArrayLike | None = None
@@ -130,7 +136,11 @@ class BodySurface:
         return inv.reshape(-1, 3), _unit(acc)
 
     def closest(
-        self, points: npt.ArrayLike, normal: str = "phong", feature_tol: float = 1e-9
+        self,
+        points: npt.ArrayLike,
+        normal: str = "phong",
+        feature_tol: float = 1e-9,
+        hessian_below: float = np.inf,
     ) -> ClosestPoints:
         """Exact closest points, signed distances and contact normals.
 
@@ -140,6 +150,7 @@ class BodySurface:
                 or ``"face"`` (raw facet normal, for comparison only).
             feature_tol: barycentric tolerance below which the closest point is taken to lie
                 on an edge or vertex (for the choice of pseudonormal).
+            hessian_below: unused here (a smooth body's Hessian, :mod:`.smooth`).
         """
         x = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         if len(x) == 0:
@@ -229,25 +240,31 @@ class BroadPhase:
     _d0: F64 | None = field(default=None, repr=False)
     _n0: F64 | None = field(default=None, repr=False)
 
-    def query(self, body: BodySurface, x: F64, normal: str = "phong") -> tuple[F64, F64]:
-        """Signed distance and normal of every point of ``x``, searching only the candidates."""
+    def query(
+        self, body: BodySurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
+    ) -> tuple[F64, F64, F64 | None]:
+        """Signed distance, normal and (smooth body) Hessian of every point of ``x``, searching
+        only the candidates; a skipped point keeps its last normal and gets a zero Hessian."""
         n = len(x)
         if self._x0 is None or self._x0.shape != x.shape:
-            res = body.closest(x, normal)
+            res = body.closest(x, normal, hessian_below=hessian_below)
             self._x0, self._d0, self._n0 = x.copy(), res.distance.copy(), res.normal.copy()
             self.skipped_fraction = 0.0
-            return res.distance, res.normal
+            return res.distance, res.normal, res.hessian
         assert self._d0 is not None and self._n0 is not None
         bound = self._d0 - np.linalg.norm(x - self._x0, axis=1)
         near = bound <= self.band
         d = bound.copy()
         nrm = self._n0.copy()
+        hess = np.zeros((n, 3, 3)) if body.smooth else None
         if near.any():
-            res = body.closest(x[near], normal)
+            res = body.closest(x[near], normal, hessian_below=hessian_below)
             d[near] = res.distance
             nrm[near] = res.normal
+            if hess is not None:
+                hess[near] = res.hessian
             self._x0[near] = x[near]
             self._d0[near] = res.distance
             self._n0[near] = res.normal
         self.skipped_fraction = float(1.0 - near.sum() / n) if n else 0.0
-        return d, nrm
+        return d, nrm, hess

@@ -18,7 +18,12 @@ whether the displacement ``u`` is a plain vector Function or ``ufl.split(q)[0]``
 * ``u_k``      the displacement at the points when the state was refreshed, so that the gap is
   linearised about the current iterate, g ≈ g_k + n_k·(u − u_k) (exact at u = u_k);
 * ``lam``      the augmented-Lagrangian multiplier (normal traction per reference area) [Pa];
-* ``u_old``    the displacement at the last converged load step (friction slip increment).
+* ``u_old``    the displacement at the last converged load step (friction slip increment);
+* ``hessian``  H_k, the distance's Hessian, for a smooth body only
+  (:class:`fenics_garment.contact.smooth.SmoothBody`): the gap is then linearised to second order,
+  g ≈ g_k + n_k·δ + ½ δ·H_k δ, and the contact direction is n ≈ n_k + H_k δ, δ = u − u_k, so the
+  Jacobian holds the turning of the body normal (consistent: quadratic Newton). On the faceted
+  body H_k = 0 almost everywhere and unbounded (1/d) over edges, so it is left out there.
 """
 
 from __future__ import annotations
@@ -35,6 +40,14 @@ from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.contact.search import BodySurface, BroadPhase
 
 F64 = npt.NDArray[np.float64]
+
+#: Points up to this much [m] outside the traction's reach get the smooth body's Hessian too.
+HESSIAN_MARGIN = 1e-4
+#: Points that penetrate deeper than this [m] get no Hessian term: right after a dressing step
+#: (millimetres of new penetration, t_N = κ × depth) its −t_N H, a negative stiffness over convex
+#: parts, made Newton diverge (SNES −9 on 5 of 19 cotton-gilet steps); converged penetrations are
+#: ≤ 0.14 mm with the penalty (README), so every point has it at the end and Newton is quadratic.
+HESSIAN_DEPTH = 1e-3
 
 
 def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
@@ -128,6 +141,12 @@ class ContactState:
         self.u_k = dolfinx.fem.Function(self.Qv, name="u_k")
         self.lam = dolfinx.fem.Function(self.Qs, name="multiplier")
         self.u_old = dolfinx.fem.Function(self.Qv, name="u_old")
+        self.hessian: dolfinx.fem.Function | None = None
+        if body.smooth:
+            qt = basix.ufl.quadrature_element(
+                cell, (3, 3), points=self.points, weights=self.weights
+            )
+            self.hessian = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, qt), name="H")
         self.shrink = dolfinx.fem.Constant(mesh, 0.0)  # dressing: body shrunk by s [m]
         self.u = u
         x = ufl.SpatialCoordinate(mesh)
@@ -162,13 +181,15 @@ class ContactState:
         xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         uq = self._u_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         t1 = time.perf_counter()
+        below = self._active_distance()
         if self._unique is not None:
             first, inverse = self._unique
-            d, nrm = self._broad.query(self.body, xq[first], self.normal)
+            d, nrm, hess = self._broad.query(self.body, xq[first], self.normal, below)
             searched = len(first)
             d, nrm = d[inverse], nrm[inverse]
+            hess = None if hess is None else hess[inverse]
         else:
-            d, nrm = self._broad.query(self.body, xq, self.normal)
+            d, nrm, hess = self._broad.query(self.body, xq, self.normal, below)
             searched = len(d)
         t2 = time.perf_counter()
         dofs = self._dofs
@@ -176,6 +197,11 @@ class ContactState:
         for k in range(3):
             self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
             self.u_k.x.array[3 * dofs + k] = uq[:, k]
+        if self.hessian is not None and hess is not None:
+            hess[self.gap.x.array[dofs] < -HESSIAN_DEPTH] = 0.0  # transient deep points
+            for k in range(9):
+                self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
+            self.hessian.x.scatter_forward()
         for f in (self.gap, self.normal_fn, self.u_k):
             f.x.scatter_forward()
         tm = self.timings
@@ -188,10 +214,28 @@ class ContactState:
 
     __call__ = refresh
 
+    def _active_distance(self) -> float:
+        """A body distance above which no point carries traction, t_N = ⟨λ − κ g⟩₊ = 0 (plus
+        HESSIAN_MARGIN): a smooth body's Hessian is needed only below it."""
+        lam = float(self.lam.x.array.max(initial=0.0))
+        kappa = float(self.kappa.value) if self.kappa is not None else np.inf
+        return self.offset - float(self.shrink.value) + lam / kappa + HESSIAN_MARGIN
+
     # -- helpers ------------------------------------------------------------------------------
     def linearised_gap(self) -> ufl.core.expr.Expr:
-        """g = g_k + n_k·(u − u_k): the gap, exact at the refresh point, linear in u."""
-        return self.gap + ufl.dot(self.normal_fn, self.u - self.u_k)
+        """g = g_k + n_k·δ (+ ½ δ·H_k δ on a smooth body), δ = u − u_k: exact at the refresh
+        point, with the distance's first (and second) derivative there."""
+        du = self.u - self.u_k
+        g = self.gap + ufl.dot(self.normal_fn, du)
+        if self.hessian is not None:
+            g += 0.5 * ufl.dot(du, ufl.dot(self.hessian, du))
+        return g
+
+    def contact_normal(self) -> ufl.core.expr.Expr:
+        """n = n_k (+ H_k δ on a smooth body): the gap's gradient at u, to the same order."""
+        if self.hessian is None:
+            return self.normal_fn
+        return self.normal_fn + ufl.dot(self.hessian, self.u - self.u_k)
 
     def accept_step(self) -> None:
         """Mark the current state as converged: the friction slip restarts from here.

@@ -83,9 +83,12 @@ def contact_residual(
     """Virtual work of the contact tractions on the test displacement v (residual sign: + internal).
 
     R_c(v) = −∫ t_N n·v dA − ∫ t_T·v dA   (over the reference area, at the contact points)
+
+    n is ``state.contact_normal()``: the refreshed normal, plus its turning H_k δ on a smooth
+    body, so that R_c is the variation of the penalty energy of the linearised gap.
     """
     t_n = normal_traction(state, kappa)
-    form = -t_n * ufl.dot(state.normal_fn, v) * state.dx
+    form = -t_n * ufl.dot(state.contact_normal(), v) * state.dx
     if friction is not None:
         t_t = friction_traction(state, friction.mu, friction.kappa_t, t_n)
         form += -ufl.dot(t_t, v) * state.dx

@@ -16,6 +16,7 @@ import numpy as np
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import search
 from fenics_garment.contact import shell as shell_contact
+from fenics_garment.contact.smooth import SmoothBody
 from fenics_garment.geometry import garments as gm
 from fenics_garment.geometry.body import BodySurface
 from fenics_garment.materials import Fabric, fabric
@@ -161,7 +162,8 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     p = scene.physics
     gravity = model.add_gravity() if p.gravity else None
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
-    sbody = search.BodySurface(body.vertices, body.triangles, keep=keep)  # cropped search body
+    surface = SmoothBody if p.body_surface == "smooth" else search.BodySurface
+    sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
     contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model),
                                    mu=p.friction if p.friction > 0 else None)  # fmt: skip
     mu = contact.friction.mu if contact.friction else None

@@ -98,6 +98,7 @@ class PhysicsConfig:
     tolerance: float = 0.01  # augmented Lagrangian: max penetration / garment thickness
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
     max_updates: int = 8  # augmented-Lagrangian multiplier updates
+    body_surface: str = "smooth"  # smooth (contact.smooth: C² IMLS distance) | faceted
 
 
 @dataclass(frozen=True)
@@ -156,6 +157,7 @@ EASE_LEVELS = {
 }
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
+BODY_SURFACES = ("faceted", "smooth")  # contact.search.BodySurface | contact.smooth.SmoothBody
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 
 
@@ -314,6 +316,7 @@ def _check(s: Scene) -> None:
         _require(ok, src, f"garment.fabric_overrides.{k}", f"must be {bound}, got {v}")
     _require(0 <= p.friction <= 2, src, "physics.friction", f"must lie in [0, 2], got {p.friction}")
     _one_of(p.contact, CONTACT_METHODS, src, "physics.contact")
+    _one_of(p.body_surface, BODY_SURFACES, src, "physics.body_surface")
     _require(0 < p.tolerance <= 1, src, "physics.tolerance",
              f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")
     _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")

@@ -39,6 +39,15 @@ class DressStep:
     seconds: float
     regularisation: float  # c [Pa/m] during the step
     stage: str = "dress"  # "dress" (body growing) or "release" (spring released at s = 0)
+    # r_k/r_(k-1) of the last two Newton iterations (quadratic convergence: the last ≪ the one
+    # before); empty when the solve took fewer than two iterations
+    final_ratios: list[float] = field(default_factory=list)
+
+
+def final_ratios(solver: NonlinearSolver) -> list[float]:
+    """The residual ratios r_k/r_(k−1) of the last two iterations of the solver's last solve."""
+    r = solver.residual_history()
+    return [float(r[k] / r[k - 1]) for k in range(max(len(r) - 2, 1), len(r)) if r[k - 1] > 0]
 
 
 @dataclass
@@ -254,6 +263,7 @@ def dress(
         its, reason = solver.solve()
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
+            rec.final_ratios = final_ratios(solver)
             rep.steps.append(rec)
             rep.spring_traction = rec.regularisation * reg.stretch(q)
             st.accept_step()
@@ -403,6 +413,7 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> 
         pr.retries = 0
         moved = reg.stretch(model.q)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
+        rec.final_ratios = final_ratios(solver)
         rep.steps.append(rec)
         rep.final_regularisation = c
         rep.spring_traction = c * moved
