@@ -1,4 +1,4 @@
-"""The PETSc options a garment solve accepts (``[solver.petsc]``, ``NonlinearSolver(petsc_options)``).
+"""The PETSc options a garment solve accepts (scene `[solver.petsc]`, `NonlinearSolver`).
 
 The solver is Newton with a line search (the dressing switches between line searches, so every
 SNES type without one — ``ksponly``, ``newtontr``, ``ngmres`` … — would crash PETSc in
@@ -126,10 +126,10 @@ OPTIONS: dict[str, Check] = {
     "pc_gamg_threshold": _real(-1.0, 1.0),
     "pc_gamg_agg_nsmooths": _integer(0, 10),
     "pc_hypre_type": _choice(("boomeramg", "pilut", "euclid")),
-    **{f: _flag for f in ("snes_monitor", "snes_converged_reason", "snes_linesearch_monitor",
-                          "snes_view", "ksp_monitor", "ksp_converged_reason", "ksp_view",
-                          "options_left")},  # fmt: skip
 }
+FLAGS = ("snes_monitor", "snes_converged_reason", "snes_linesearch_monitor", "snes_view",
+         "ksp_monitor", "ksp_converged_reason", "ksp_view", "options_left")  # fmt: skip
+OPTIONS |= dict.fromkeys(FLAGS, _flag)
 
 #: MUMPS integer and real controls by number (ICNTL(1…60), CNTL(1…15)).
 _MUMPS = re.compile(r"^mat_mumps_(icntl|cntl)_(\d+)$")
