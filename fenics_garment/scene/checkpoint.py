@@ -197,8 +197,12 @@ def read(run_folder: Path, scene: config.Scene, comm: MPI.Comm) -> dict:
         )
     if meta["scene"] != fingerprint(scene):
         bars = meta.get("error_bars")
-        hint = (" (the run was made with --error-bars: resume it with --error-bars, or "
-                "without a scene file)" if bars is True and not scene.output.error_bars else "")
+        hint = (
+            " (the run was made with --error-bars: resume it with --error-bars, or "
+            "without a scene file)"
+            if bars is True and not scene.output.error_bars
+            else ""
+        )
         raise ResumeError(
             f"{run_folder}: the checkpoint belongs to another scene than the one given (the "
             "scene file changed since?); resume with the folder's own scene_used.toml, or run "

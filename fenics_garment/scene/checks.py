@@ -74,7 +74,7 @@ def tight_area(built) -> float:
     return st.mesh.comm.allreduce(float(a[g < 0].sum()), op=MPI.SUM)
 
 
-def _forces(built) -> tuple[np.ndarray, np.ndarray]:
+def forces(built) -> tuple[np.ndarray, np.ndarray]:
     """(applied dead load, body reaction) as 3-vectors [N] (collective)."""
     model, c = built.model, built.contact
     mesh = model.geometry.mesh
@@ -99,15 +99,18 @@ def _ratio(num: float, den: float) -> float:
     return 0.0 if num == 0 else math.inf
 
 
-def result_checks(built, measures: dict, spring_traction: float, tight: float) -> list[Check]:
-    """The checks of the module doc on the final state (collective).
+def result_checks(
+    built, measures: dict, spring_traction: float, tight: float, applied_reaction
+) -> list[Check]:
+    """The checks of the module doc on the final state.
 
     ``measures``: the run's contact measures (``max_penetration_m``, ``max_pressure_kPa``,
-    ``contact_area_garment_m2``); ``tight``: :func:`tight_area` of the pattern.
+    ``contact_area_garment_m2``, ``contact_force_N``); ``tight``: :func:`tight_area` of the
+    pattern; ``applied_reaction``: :func:`forces`.
     """
     thickness = _thickness(built)
     p_max = measures["max_pressure_kPa"] * 1e3
-    applied, reaction = _forces(built)
+    applied, reaction = applied_reaction
     scale = max(np.linalg.norm(applied), np.linalg.norm(reaction), measures["contact_force_N"])
     imbalance = _ratio(float(np.linalg.norm(applied + reaction)), scale)
     area = measures["contact_area_garment_m2"]

@@ -66,6 +66,9 @@ def _take(lock: Path, me: dict) -> str | None:
         except FileExistsError:
             held = _holder(lock)
             pid, host = held.get("pid"), held.get("host")
+            if held and host == me["host"] and pid == me["pid"]:
+                return None  # this process holds it (the error bars' fine level): nested
+
             if held and host == me["host"] and isinstance(pid, int) and not _alive(pid):
                 lock.unlink(missing_ok=True)  # left by a killed run
                 continue

@@ -150,8 +150,11 @@ def reg_limits(scene, fail) -> None:
     lo, hi = REG_RANGE
     r = scene.dressing.regularisation
     if not lo <= r <= hi:
-        why = ("nothing would hold the garment while the body grows (friction is off then)"
-               if r < lo else "the spring would be as stiff as the contact and never released")
+        why = (
+            "nothing would hold the garment while the body grows (friction is off then)"
+            if r < lo
+            else "the spring would be as stiff as the contact and never released"
+        )
         fail("dressing.regularisation", f"= {r:g} is outside [{lo:g}, {hi:g}]: {why} "
              "(default 0.01)")  # fmt: skip
 
