@@ -110,8 +110,9 @@ def _run_guarded(args: argparse.Namespace) -> int:
     except _input_errors() as err:
         return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
     except OutputError as err:
+        where = err.folder or "<run folder>"
         hint = ("; nothing half-written is left: free space (or fix the permissions) and "
-                "continue with `fenics-garment run --resume <run folder>`")  # fmt: skip
+                f"continue with `fenics-garment run --resume {where}`")  # fmt: skip
         return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint)
     except KeyboardInterrupt:
         return mpi_guard.end_together(EXIT_INTERRUPTED, "interrupted; a run continues from "

@@ -46,7 +46,10 @@ def comfort_band(p_kpa: float) -> str:
 
 class OutputError(RuntimeError):
     """A file of the run could not be written (full disk, read-only folder, …): nothing
-    half-written is left under the file's own name."""
+    half-written is left under the file's own name. ``folder``: the run folder (set by the
+    run), to resume from."""
+
+    folder: Path | None = None
 
 
 def describe_os_error(err: OSError) -> str:

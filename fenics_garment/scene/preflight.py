@@ -139,7 +139,7 @@ MIN_KAPPA_HAT = 0.1
 #: with no support at all while the body grows (friction is off then, and a scene has no
 #: boundary conditions), so Newton meets a singular Jacobian or the garment drifts off; above
 #: 1 the spring is as stiff as the contact and is not released.
-REG_RANGE = (1e-6, 1.0)
+REG_RANGE = (1e-4, 1.0)
 #: Largest fabric values (moduli in Pa, bending rigidity in N·m, thickness in m, density in
 #: kg/m³): beyond them a "fabric" is steel-like or worse and the residual overflows.
 FABRIC_MAX = {"E_warp": 1e12, "E_weft": 1e12, "G12": 1e12, "B_warp": 1e3, "B_weft": 1e3,

@@ -18,6 +18,9 @@ One output folder per run, ``<output.folder>/<name>/``:
 from __future__ import annotations
 
 import math
+import os
+import re
+import shutil
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,17 +132,67 @@ class _Frames:
         n = len(self.scalars)
         for k, f in enumerate(self.scalars):  # same P2 nodes: the blocked space's k-th component
             f.x.array[:] = self.packed.x.array[k::n]
-        self.writer.write(float(self.k))
+        self._guarded(lambda: self.writer.write(float(self.k)))
         self.k += 1
+
+    def _guarded(self, work) -> None:
+        """``work()`` on the ADIOS2 writer; a failure on any rank (a full disk: ADIOS2 raises a
+        RuntimeError) is an OutputError on every rank, with the partial series removed."""
+        comm = self.built.model.geometry.mesh.comm
+        message = None
+        try:
+            work()
+        except RuntimeError as err:
+            message = _adios_reason(str(err), self.tmp)
+        message = next((m for m in comm.allgather(message) if m), None)
+        if message is None:
+            return
+        # The writer's destructor flushes again; on a disk still full it would fail again and
+        # abort the process. So its files are emptied (which frees their space although
+        # ADIOS2 keeps them open), it is closed, and the partial series removed; a writer that
+        # cannot even close then is kept alive (with its emptied folder) until the process ends.
+        writer, self.writer = self.writer, None
+        if comm.rank == 0:
+            _empty(self.tmp)
+        comm.Barrier()
+        try:
+            writer.close()
+            closed = True
+        except RuntimeError:
+            _ABANDONED.append(writer)
+            closed = False
+        if comm.allreduce(closed, op=MPI.LAND) and comm.rank == 0:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+        raise output.OutputError(message)
 
     def close(self, comm: MPI.Comm) -> None:
         if self.writer is None:
             return
-        self.writer.close()
+        self._guarded(self.writer.close)
         comm.Barrier()
         if comm.rank == 0:
             output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp))
         comm.Barrier()
+
+
+#: VTX writers that failed (kept alive: see ``_Frames._guarded``).
+_ABANDONED: list = []
+
+
+def _empty(folder: Path) -> None:
+    for f in folder.glob("*"):
+        try:
+            os.truncate(f, 0)
+        except OSError:
+            pass
+
+
+def _adios_reason(text: str, path: Path) -> str:
+    """One line from an ADIOS2 exception: the errno's reason when there is one."""
+    plain = re.sub(r"\x1b\[[0-9;]*m", "", text)
+    m = re.search(r"errno = (\d+)", plain)
+    why = os.strerror(int(m.group(1))) if m else " ".join(plain.split())[:200]
+    return f"cannot write {path}: {why}"
 
 
 def _write_xdmf(folder: Path, garment, fields: dict[str, np.ndarray]) -> None:
@@ -249,6 +302,10 @@ def run(
         state.start(fresh=meta is None, clear=clear)
         result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
                          checkpoints=checkpoints)  # fmt: skip
+    except output.OutputError as err:
+        state.finish("failed", collective=False)
+        err.folder = err.folder or folder
+        raise
     except BaseException:
         state.finish("failed", collective=False)
         raise
