@@ -172,3 +172,32 @@ def test_ksponly_in_a_real_process_is_a_message_not_a_segfault(tmp_path):
                        capture_output=True, text=True, timeout=300)  # fmt: skip
     assert p.returncode == 2, p.stderr
     assert "snes_type" in p.stderr and "Traceback" not in p.stderr
+
+
+# -- smaller items ---------------------------------------------------------------------------
+def test_a_large_cylinder_is_not_refused_for_the_garment_triangles():
+    """The garment's triangle estimate uses the garment's area (a tube: 2πRL), not the body's:
+    a 10 m cylinder with a 0.5 m body mesh and a 2 cm garment mesh makes 73k garment triangles
+    (2πRL / (√3/4 h²)), far below the limit (the body's area would have made 3.7M)."""
+    s = small_tube(body={"radius": 10.0, "mesh_size": 0.5})
+    assert 2 * math.pi * 10 * 0.2 / (math.sqrt(3) / 4 * 0.02**2) < preflight.MAX_TRIANGLES / 20
+    preflight.scene_limits(s)
+
+
+def test_the_fingerprint_ignores_the_output_folder_but_not_the_error_bars():
+    from fenics_garment.scene.checkpoint import fingerprint
+
+    s = small_tube()
+    assert fingerprint(s) == fingerprint(small_tube(output={"folder": "elsewhere"}))
+    assert fingerprint(s) != fingerprint(small_tube(output={"error_bars": True}))
+
+
+def test_a_missing_scan_is_refused_on_every_rank_relative_to_the_scene(tmp_path):
+    (tmp_path / "scenes").mkdir()
+    path = tmp_path / "scenes" / "scan.toml"
+    path.write_text('[body]\nkind = "scan"\nfile = "body.obj"\n')
+    s = config.load(path)
+    with pytest.raises(preflight.PreflightError, match="relative to the scene file"):
+        preflight.scene_limits(s)
+    (tmp_path / "scenes" / "body.obj").write_text("v 0 0 0\n")
+    preflight.scene_limits(s)  # found next to the scene file, not in the working directory

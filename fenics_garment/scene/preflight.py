@@ -105,6 +105,8 @@ def scene_limits(scene) -> None:
         raise PreflightError(f"{src}: {err}") from None
     if b.kind == "mannequin":
         mannequin_limits(scene)
+    if b.kind == "scan":
+        scan_file(scene, fail)
     area = BODY_AREA
     if b.kind == "cylinder":
         lo, hi = LENGTH_RANGE
@@ -157,6 +159,16 @@ def reg_limits(scene, fail) -> None:
         )
         fail("dressing.regularisation", f"= {r:g} is outside [{lo:g}, {hi:g}]: {why} "
              "(default 0.01)")  # fmt: skip
+
+
+def scan_file(scene, fail) -> None:
+    """The scan file exists (checked on every rank: only rank 0 reads it)."""
+    path = Path(scene.body.file)
+    if not path.is_absolute() and scene.source:
+        path = Path(scene.source).parent / path
+    if not path.is_file():
+        fail("body.file", f"= {scene.body.file!r}: no such file {path} (a relative path is "
+             "relative to the scene file's folder)")  # fmt: skip
 
 
 def fabric_limits(scene, fail) -> None:
