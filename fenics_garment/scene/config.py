@@ -150,7 +150,8 @@ GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
 #: The body kind each garment kind needs (the rest need a mannequin or a scan).
 GARMENT_BODY = {"tube": "cylinder", "sleeve": "arm"}
 #: Levels that a per-level ease may name, per garment kind (others are not checked).
-_TORSO = ("hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder", "neck_base")
+_TORSO = ("hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder", "neck_base",
+          "neck")  # fmt: skip
 EASE_LEVELS = {
     "sleeve": ("wrist", "forearm", "elbow", "upper_arm"),
     "stocking": ("ankle", "calf", "knee", "thigh"),
