@@ -97,16 +97,21 @@ def _flag(key: str, value: object) -> object:
     raise PetscOptionError(key, f"must be true or false, got {_describe(value)}")
 
 
-TOL = _real(0.0, 1.0)
+#: Newton tolerances: looser ones stop Newton before the pressure has converged (the scene
+#: default is rtol 1e-8; the residual is in newtons, a garment's forces are 1–100 N).
+NEWTON_TOL = _real(0.0, 1e-4)
+NEWTON_ATOL = _real(0.0, 1e-3)
+#: Linear-solver tolerances (an inexact Newton step is fine, a meaningless one is not).
+TOL = _real(0.0, 1e-2)
 _SNES_WHY = ": the dressing needs a Newton line search (other SNES types have none)"
 
 #: option name -> check of its value.
 OPTIONS: dict[str, Check] = {
     "snes_type": _choice(SNES_TYPES, _SNES_WHY),
     "snes_linesearch_type": _choice(LINE_SEARCHES),
-    "snes_rtol": TOL,
-    "snes_stol": TOL,
-    "snes_atol": _real(0.0, 1e10),
+    "snes_rtol": NEWTON_TOL,
+    "snes_stol": NEWTON_TOL,
+    "snes_atol": NEWTON_ATOL,
     "snes_max_it": _integer(1, 1000),
     "snes_max_funcs": _integer(1, 1_000_000),
     "snes_divergence_tolerance": _real(1.0, 1e300, extra=(-1.0,)),
@@ -115,7 +120,7 @@ OPTIONS: dict[str, Check] = {
     "snes_linesearch_maxstep": _real(0.0, 1e300, lo_open=True),
     "ksp_type": _choice(KSP_TYPES),
     "ksp_rtol": TOL,
-    "ksp_atol": _real(0.0, 1e10),
+    "ksp_atol": NEWTON_ATOL,
     "ksp_divtol": _real(1.0, 1e300),
     "ksp_max_it": _integer(1, 100_000),
     "ksp_gmres_restart": _integer(1, 10_000),
