@@ -295,3 +295,36 @@ def test_a_read_only_checkpoint_folder_is_refused_up_front(interrupted, tmp_path
             _umount(ckpt)
         else:
             ckpt.chmod(0o755)
+
+
+def test_an_injected_enospc_in_a_checkpoint_keeps_the_previous_one(tmp_path, capsys,
+                                                                   monkeypatch):  # fmt: skip
+    """Where no tmpfs can be mounted: the third checkpoint's write fails with ENOSPC at the
+    file-system call. Exit 5, one line; checkpoint 2 stays complete and the resumed run (disk
+    "freed") completes."""
+    import errno
+
+    real = Path.write_bytes
+    calls = {"n": 0}
+
+    def full_disk(self, data):
+        if self.name.startswith(".state-"):
+            calls["n"] += 1
+            if calls["n"] == 3:
+                real(self, data[: len(data) // 2])  # part of it, as a full disk does
+                raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC), str(self))
+        return real(self, data)
+
+    scene = tmp_path / "s.toml"
+    scene.write_text(config.dumps(small_tube(output={"vtx": False})))
+    with monkeypatch.context() as m:
+        m.setattr(Path, "write_bytes", full_disk)
+        assert cli.main(["run", str(scene), "-o", str(tmp_path / "out"), "-q"]) == 5
+    err = capsys.readouterr().err.strip()
+    assert "No space left on device" in err and len(err.splitlines()) == 1, err
+    folder = tmp_path / "out" / "tube-on-cylinder"
+    _no_partial_files(folder)
+    meta = json.loads((folder / "checkpoint" / "progress.json").read_text())
+    assert meta["checkpoint"] == 2 and (folder / "checkpoint" / "state-2.r0.npz").exists()
+    assert not (folder / "checkpoint" / "state-3.r0.npz").exists()
+    assert cli.main(["run", "--resume", str(folder), "-q"]) == 0
