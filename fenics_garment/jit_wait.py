@@ -133,7 +133,9 @@ def _take_over(c: Path) -> None:
         takeover.unlink(missing_ok=True)
 
 
-def get_cached_module(module_name, object_names, cache_dir, timeout):
+def get_cached_module(
+    module_name: str, object_names: list[str], cache_dir: str | Path, timeout: int
+) -> tuple[object | None, object | None]:
     """FFCx's ``get_cached_module`` that waits for a live compiler as long as it takes and takes
     over a dead one's compilation (the module doc)."""
     cache_dir = Path(cache_dir)

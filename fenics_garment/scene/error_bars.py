@@ -153,6 +153,7 @@ def _coarse_level(scene: config.Scene, folder: Path, comm: MPI.Comm, kwargs: dic
 
 
 def _fine_level(scene: config.Scene, folder: Path, comm: MPI.Comm, quiet: bool, kwargs: dict):
+    """The fine level (recording the whole run's scene), resumed when it has a checkpoint."""
     from fenics_garment.scene.run import run
 
     fine = replace(scene, output=replace(scene.output, error_bars=False))

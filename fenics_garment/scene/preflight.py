@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from fenics_garment._stack import MPI
@@ -148,7 +149,7 @@ FABRIC_MAX = {"E_warp": 1e12, "E_weft": 1e12, "G12": 1e12, "B_warp": 1e3, "B_wef
               "thickness": 0.05, "density": 1e5}  # fmt: skip
 
 
-def reg_limits(scene, fail) -> None:
+def reg_limits(scene, fail: Callable[[str, str], None]) -> None:
     lo, hi = REG_RANGE
     r = scene.dressing.regularisation
     if not lo <= r <= hi:
@@ -161,7 +162,7 @@ def reg_limits(scene, fail) -> None:
              "(default 0.01)")  # fmt: skip
 
 
-def scan_file(scene, fail) -> None:
+def scan_file(scene, fail: Callable[[str, str], None]) -> None:
     """The scan file exists (checked on every rank: only rank 0 reads it)."""
     path = Path(scene.body.file)
     if not path.is_absolute() and scene.source:
@@ -171,7 +172,7 @@ def scan_file(scene, fail) -> None:
              "relative to the scene file's folder)")  # fmt: skip
 
 
-def fabric_limits(scene, fail) -> None:
+def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
     for k, v in scene.garment.fabric_overrides.items():
         top = FABRIC_MAX.get(k)
         if top is not None and v > top:

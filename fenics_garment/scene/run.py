@@ -22,6 +22,7 @@ import os
 import re
 import shutil
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -39,6 +40,7 @@ from fenics_garment.scene.dressing import (
     DressingFailed,
     DressReport,
     DressStep,
+    Progress,
     dress,
 )
 from fenics_garment.shell.energy import membrane_forces
@@ -331,7 +333,16 @@ def _status(result: RunResult) -> str:
     return "completed" if result.checks_passed else "checks failed"
 
 
-def _run_in(state, scene, recorded, meta, *, quiet, first_step, checkpoints) -> RunResult:
+def _run_in(
+    state: run_folder.RunFolder,
+    scene: config.Scene,
+    recorded: config.Scene,
+    meta: dict | None,
+    *,
+    quiet: bool,
+    first_step: float | None,
+    checkpoints: bool,
+) -> RunResult:
     """The run itself, in its locked folder."""
     folder, comm = state.path, state.comm
     t_start = time.perf_counter()
@@ -375,7 +386,7 @@ def _run_in(state, scene, recorded, meta, *, quiet, first_step, checkpoints) -> 
         frames.write()
     t0 = time.perf_counter()
     frames.close(comm)
-    result = _outputs(built, solver, report, (completed, message), tight, times, say)
+    result = _outputs(built, solver, report, (completed, message), tight, times)
     times["outputs"] = time.perf_counter() - t0
     times["total"] = time.perf_counter() - t_start
     result.summary["run_id"] = state.run_id
@@ -389,7 +400,15 @@ def _run_in(state, scene, recorded, meta, *, quiet, first_step, checkpoints) -> 
     return result
 
 
-def _dress(built, solver, frames, ckpt, progress, first_step, say):
+def _dress(
+    built: scene_build.Built,
+    solver: NonlinearSolver,
+    frames: _Frames,
+    ckpt: checkpoint.Writer | None,
+    progress: Progress | None,
+    first_step: float | None,
+    say: Callable[..., object],
+) -> tuple[DressReport, bool, str]:
     """The dressing with its progress lines: (report, completed, message)."""
     scene = built.scene
     d, p = scene.dressing, scene.physics
@@ -418,7 +437,9 @@ def _dress(built, solver, frames, ckpt, progress, first_step, say):
     return report, True, ""
 
 
-def _say_release(say, built, report: DressReport, completed: bool) -> None:
+def _say_release(
+    say: Callable[..., object], built: scene_build.Built, report: DressReport, completed: bool
+) -> None:
     effect = report.regularisation_effect
     grew_only = not any(step.stage == "release" for step in report.steps)
     if not completed and grew_only and report.final_regularisation == 0.0:
@@ -443,7 +464,14 @@ def _say_release(say, built, report: DressReport, completed: bool) -> None:
             f"{effect:.2%}")  # fmt: skip
 
 
-def _outputs(built, solver, report, outcome, tight, times, say) -> RunResult:
+def _outputs(
+    built: scene_build.Built,
+    solver: NonlinearSolver,
+    report: DressReport,
+    outcome: tuple[bool, str],
+    tight: float,
+    times: dict[str, float],
+) -> RunResult:
     """Fields, measures, checks and the summary of the final state (collective)."""
     completed, message = outcome
     scene = built.scene
@@ -492,7 +520,7 @@ def _outputs(built, solver, report, outcome, tight, times, say) -> RunResult:
     return RunResult(Path(), summary, regions, report, built, completed, message, found, fields)
 
 
-def _write_outputs(folder: Path, built, result: RunResult) -> None:
+def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) -> None:
     """The files of rank 0 (a write failure is an OutputError on every rank)."""
     scene, f = built.scene, result.fields
     result.folder = folder
