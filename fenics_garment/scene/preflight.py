@@ -135,8 +135,8 @@ def scene_limits(scene) -> None:
 
 
 #: Smallest penalty scale κ̂ of the plain penalty (the augmented Lagrangian corrects a soft one):
-#: the penetration grows like 1/κ̂ (5 % of h at 10), so below this the garment sinks into the
-#: body by about half its thickness or more.
+#: the penetration grows like 1/κ̂ (0.17 h at 10 on the tight tube), so below this the garment
+#: sinks into the body by many times its thickness.
 MIN_KAPPA_HAT = 0.1
 #: Range of dressing.regularisation (c₀ relative to A/ℓ², default 1e-2): 0 leaves the garment
 #: with no support at all while the body grows (friction is off then, and a scene has no
