@@ -43,4 +43,10 @@ if not dolfinx.__version__.startswith("0.11"):  # pragma: no cover - depends on 
         f"({STACK}). Install dolfinx-solver-real 0.11.x or python3-dolfinx-real 0.11."
     )
 
+# FFCx's JIT waits 10 s for another process compiling the same form, then fails; wait for a
+# live compiler instead and take over a dead one's (fenics_garment.jit_wait)
+from fenics_garment import jit_wait  # noqa: E402
+
+jit_wait.install()
+
 __all__ = ["MPI", "STACK", "PETSc", "dolfinx", "ufl"]

@@ -77,23 +77,54 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return demos.REGISTRY[name].run(Path(args.output), quiet=args.quiet)
 
 
-#: Errors of the user's input: a one-line message and exit code 2 (no traceback).
+#: Exit codes (documented in ``run --help`` and the README).
+EXIT_INTERNAL, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERRUPTED = 1, 2, 5, 130
+
+
 def _input_errors() -> tuple[type[Exception], ...]:
+    """Errors of the user's input or set-up: a one-line message and exit code 2."""
     from fenics_garment.geometry.errors import GeometryError, ScanError
     from fenics_garment.materials import MaterialError
+    from fenics_garment.petsc_options import PetscOptionError
     from fenics_garment.scene.checkpoint import ResumeError
     from fenics_garment.scene.config import SceneError
     from fenics_garment.scene.preflight import PreflightError
 
-    return (SceneError, ScanError, MaterialError, PreflightError, ResumeError, GeometryError)
+    return (SceneError, ScanError, MaterialError, PreflightError, ResumeError, GeometryError,
+            PetscOptionError)  # fmt: skip
 
 
-def _error(message: str) -> int:
-    from fenics_garment._stack import MPI
+def _one_line(err: BaseException) -> str:
+    return " ".join(str(err).split()) or type(err).__name__
 
-    if MPI.COMM_WORLD.rank == 0:
-        print(f"error: {message}", file=sys.stderr)
-    return 2
+
+def _run_guarded(args: argparse.Namespace) -> int:
+    """``args.func(args)`` with every error turned into one line and an exit code; an error on
+    one MPI rank ends every rank (:mod:`fenics_garment.mpi_guard`)."""
+    from fenics_garment import mpi_guard
+    from fenics_garment.output import OutputError
+
+    mpi_guard.setup()
+    try:
+        return int(args.func(args))
+    except _input_errors() as err:
+        return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
+    except OutputError as err:
+        where = err.folder or "<run folder>"
+        hint = ("; nothing half-written is left: free space (or fix the permissions) and "
+                f"continue with `fenics-garment run --resume {where}`")  # fmt: skip
+        return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint)
+    except KeyboardInterrupt:
+        return mpi_guard.end_together(EXIT_INTERRUPTED, "interrupted; a run continues from "
+                                      "its last checkpoint with --resume")  # fmt: skip
+    except Exception as err:
+        if os.environ.get("FENICS_GARMENT_TRACEBACK"):
+            import traceback
+
+            traceback.print_exc()
+        return mpi_guard.end_together(
+            EXIT_INTERNAL, f"internal error: {type(err).__name__}: {_one_line(err)} (a bug: "
+            "please report it; FENICS_GARMENT_TRACEBACK=1 shows the traceback)")  # fmt: skip
 
 
 def _load_scene(args: argparse.Namespace):
@@ -113,23 +144,22 @@ def _load_scene(args: argparse.Namespace):
 
 def _cmd_run(args: argparse.Namespace) -> int:
     from fenics_garment._stack import MPI
-    from fenics_garment.scene.run import run
+    from fenics_garment.scene.run import exit_code, run
 
-    try:
-        scene = _load_scene(args)
-        if args.error_bars:
-            scene = replace(scene, output=replace(scene.output, error_bars=True))
-        if args.check:
-            return _check(scene)
-        result = run(scene, args.output, quiet=args.quiet, resume=args.resume,
-                     checkpoints=not args.no_checkpoints)  # fmt: skip
-    except _input_errors() as err:
-        return _error(str(err))
-    if not result.completed:
-        if MPI.COMM_WORLD.rank == 0:
-            print(f"error: {result.message}", file=sys.stderr)
-        return 3
-    return 0
+    scene = _load_scene(args)
+    if args.error_bars:
+        scene = replace(scene, output=replace(scene.output, error_bars=True))
+    if args.check:
+        return _check(scene)
+    result = run(scene, args.output, quiet=args.quiet, resume=args.resume,
+                 checkpoints=not args.no_checkpoints)  # fmt: skip
+    code = exit_code(result)
+    if MPI.COMM_WORLD.rank == 0 and code:
+        failed = [c.name for c in result.checks if not c.ok]
+        why = result.message or (f"the result failed its check(s) {', '.join(failed)} (see "
+                                 f"'checks' in {result.folder / 'summary.json'})")  # fmt: skip
+        print(f"error: {why}", file=sys.stderr)
+    return code
 
 
 def _check(scene) -> int:
@@ -153,10 +183,7 @@ def _check(scene) -> int:
 def _cmd_check(args: argparse.Namespace) -> int:
     from fenics_garment.scene import config
 
-    try:
-        return _check(config.load(args.scene))
-    except _input_errors() as err:
-        return _error(str(err))
+    return _check(config.load(args.scene))
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -185,8 +212,12 @@ def build_parser() -> argparse.ArgumentParser:
         "every converged dressing step a checkpoint is written to <that folder>/checkpoint/; "
         "a run that was killed continues with `run --resume <that folder>` (same number of MPI "
         "ranks), which reads the folder's scene_used.toml and gives the same answer as an "
-        "uninterrupted run. Exit codes: 0 done, 2 bad input (one-line message), 3 the dressing "
-        "did not converge (the outputs of the last converged state are written).",
+        "uninterrupted run. Exit codes: 0 done; 1 internal error (a bug); 2 bad input or a "
+        "run refused before solving (one-line message); 3 the dressing did not converge (the "
+        "outputs of the last converged state are written); 4 done, but a result check "
+        "(penetration, spring, force balance, contact area) failed: a WARNING each, see "
+        "'checks' in summary.json; 5 a file could not be written (disk full, read-only "
+        "folder): free space and --resume; 130 interrupted.",
     )
     p_run.add_argument("scene", nargs="?",
                        help="scene file, e.g. demos/cotton_gilet.toml (optional with --resume: "
@@ -228,7 +259,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
-    return int(args.func(args))
+    return _run_guarded(args)
 
 
 if __name__ == "__main__":

@@ -130,7 +130,9 @@ def _scene_demo(scene_file: str) -> Callable[..., int]:
     """A demo that runs a bundled scene file (``fenics-garment run demos/<scene_file>``)."""
 
     def run_demo(output: Path, quiet: bool = False) -> int:
-        return 0 if _run_scene(scene_file, output, quiet).completed else 3
+        from fenics_garment.scene.run import exit_code
+
+        return exit_code(_run_scene(scene_file, output, quiet))
 
     return run_demo
 
@@ -153,7 +155,9 @@ def _limb_demo(scene_file: str, levels: tuple[str, ...], ankle: str | None = Non
                 verdict = "in" if cp.ral_class(p) == "I" else "NOT in"
                 print(f"ankle pressure {p:.1f} mmHg: {cp.describe_class(p)} of RAL-GZ 387; "
                       f"{verdict} class I (18–21 mmHg)")  # fmt: skip
-        return 0 if result.completed else 3
+        from fenics_garment.scene.run import exit_code
+
+        return exit_code(result)
 
     return run_demo
 

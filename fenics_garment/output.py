@@ -44,6 +44,37 @@ def comfort_band(p_kpa: float) -> str:
 # ------------------------------------------------------------------------------------------------
 
 
+class OutputError(RuntimeError):
+    """A file of the run could not be written (full disk, read-only folder, …): nothing
+    half-written is left under the file's own name. ``folder``: the run folder (set by the
+    run), to resume from."""
+
+    folder: Path | None = None
+
+
+def describe_os_error(err: OSError) -> str:
+    """``cannot write PATH: No space left on device`` (one line)."""
+    where = f" {err.filename}" if err.filename else ""
+    return f"cannot write{where}: {err.strerror or type(err).__name__}"
+
+
+def guarded(comm, work: Callable[[], object], *, root_only: bool = True) -> None:
+    """Run ``work()`` on rank 0 (``root_only``) or on every rank; an ``OSError`` on any rank
+    becomes an :class:`OutputError` on every rank (collective: no rank is left waiting)."""
+    message = None
+    if comm.rank == 0 or not root_only:
+        try:
+            work()
+        except OSError as err:
+            message = describe_os_error(err)
+    if root_only:
+        message = comm.bcast(message, root=0)
+    else:
+        message = next((m for m in comm.allgather(message) if m), None)
+    if message:
+        raise OutputError(message)
+
+
 def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
     """Call ``write(tmp)`` for a temporary name next to ``path``, then rename it to ``path``."""
     path = Path(path)
@@ -67,10 +98,14 @@ def atomic_dir(path: Path, write: Callable[[Path], None]) -> Path:
 
     path = Path(path)
     tmp = path.with_name(f".{path.name}.part")
-    write(tmp)
-    if path.exists():
-        shutil.rmtree(path)
-    os.replace(tmp, path)
+    try:
+        write(tmp)
+        if path.exists():
+            shutil.rmtree(path)
+        os.replace(tmp, path)
+    finally:
+        if tmp.exists():
+            shutil.rmtree(tmp, ignore_errors=True)
     return path
 
 

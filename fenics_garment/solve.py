@@ -5,8 +5,12 @@
 * *pre-residual hooks* (e.g. refresh the contact gap from the current iterate) called with the
   iterate already copied into the unknown Function,
 * dead point loads added to the residual vector, scaled by the load factor λ,
-* a NaN/Inf check on every residual (SNES is told the point is outside the domain, so the line
-  search or the load stepper backs off instead of propagating NaNs),
+* a NaN/Inf check on every residual: PETSc's own norm check then ends the Newton solve with
+  ``DIVERGED_FUNCTION_NANORINF`` (petsc4py 3.25 has no ``setFunctionDomainError``), so the load
+  stepper or the dressing cuts the step instead of propagating NaNs; ``timings.nonfinite``
+  counts them,
+* the options checked against what this design supports (:mod:`fenics_garment.petsc_options`)
+  before PETSc sees them,
 * a direct solver by default, set on the KSP/PC objects directly (NonlinearProblem drops the
   options it does not consume at construction): MUMPS LDLᵀ (``cholesky``, half the flops of LU)
   when the Jacobian is symmetric — a model whose residual is the derivative of an energy, i.e.
@@ -34,6 +38,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fenics_garment._stack import MPI, PETSc, dolfinx
+from fenics_garment.petsc_options import check_options
 
 DEFAULT_SNES_OPTIONS: dict[str, object] = {
     "snes_type": "newtonls",
@@ -94,6 +99,13 @@ _REASONS = {
     for k in dir(PETSc.SNES.ConvergedReason)
     if k.isupper()
 }
+#: SNES reason of a solve stopped by a NaN/Inf residual.
+NONFINITE_REASON = int(PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF)
+
+
+def reason_name(reason: int) -> str:
+    """PETSc's name of a SNES converged reason, e.g. -4 → "diverged function nanorinf"."""
+    return _REASONS.get(int(reason), "unknown")
 
 
 @dataclass
@@ -118,6 +130,7 @@ class Timings:
     liftings: int = 0
     steps: int = 0
     cuts: int = 0
+    nonfinite: int = 0  # residual evaluations that gave NaN/Inf (each ends its Newton solve)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -166,7 +179,7 @@ class NonlinearSolver:
         if symmetric and not (petsc_options and "pc_type" in petsc_options):
             opts["pc_type"] = "cholesky"
         if petsc_options:
-            opts.update(petsc_options)
+            opts.update(check_options(petsc_options))
         self.options = opts
         F = model.residual()
         J = model.jacobian(F)
@@ -234,6 +247,8 @@ class NonlinearSolver:
             model.q.x.array[:] = q_saved
             for c, v in zip(switches, saved, strict=True):
                 c.value = v
+        if not np.isfinite(floor):  # e.g. moduli that overflow: the solves will say so
+            return floor
         atol = snes.getTolerances()[1]
         snes.setTolerances(atol=max(atol, 10.0 * floor))
         return floor
@@ -314,9 +329,8 @@ class NonlinearSolver:
                 b.axpy(-float(model.load_factor.value), solver.f_point)
             timings.residual_evaluations += 1
             timings.residual += time.perf_counter() - t0
-            norm = b.norm()
-            if not np.isfinite(norm):
-                snes_.setFunctionDomainError()
+            if not np.isfinite(b.norm()):
+                timings.nonfinite += 1
 
         def jacobian(snes_, x, J, P):
             t0 = time.perf_counter()
@@ -351,6 +365,8 @@ class NonlinearSolver:
     def raise_atol(self, atol: float) -> float:
         """Absolute residual tolerance of the following solves: at least ``atol``; returns it."""
         snes = self.problem.solver
+        if not np.isfinite(atol):  # a NaN/Inf force scale: keep the tolerance (solves fail)
+            return snes.getTolerances()[1]
         atol = max(snes.getTolerances()[1], atol)
         snes.setTolerances(atol=atol)
         return atol

@@ -7,12 +7,18 @@
 * A few of the scenes that pass the pre-build limits go through ``fenics-garment check`` (builds
   the meshes): exit code 0 or 2 with a one-line message, no traceback; one in a real process.
 * Scan files (STL, OBJ, PLY, MSH of a closed 1.7 m surface): byte flips and truncations give
-  :class:`ScanError` or load. (These found a ``sys.exit(1)`` in meshio's STL reader and an
+  :class:`ScanError` or load.
+* PETSc option values (every supported option × extremes and wrong types, unknown names) and
+  checkpoint files (byte flips and truncations of ``progress.json`` and a rank file): a
+  ``PetscOptionError`` / ``ResumeError`` with a message, or accepted. Errors on one MPI rank
+  and environment faults (full disk, read-only folders) are in ``test_reliability_ranks.py``
+  and ``test_reliability_folders.py``. (These found a ``sys.exit(1)`` in meshio's STL reader and an
   empty ``min()`` in the landmark search, both now ScanError.)
 """
 
 import os
 import random
+import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -200,3 +206,68 @@ def test_corrupted_scan_files(ext, tmp_path):
             assert str(err), "empty message"
             errors += 1
     assert errors >= 10
+
+
+# -- PETSc option values (issue 18) -----------------------------------------------------------
+def test_petsc_option_values():
+    """Every supported option with extreme numbers and wrong types, and unknown names: a
+    PetscOptionError with a one-line message, or accepted (never another exception)."""
+    from fenics_garment.petsc_options import OPTIONS, PetscOptionError, check_options
+
+    values = EXTREMES + WRONG_TYPES + ["", "lu", "newtonls", -(2**40), 2**40, 0.5, 3]
+    seen = {"ok": 0, "error": 0}
+    for key in [*OPTIONS, "mat_mumps_icntl_14", "mat_mumps_cntl_1", "snes_typo", "-snes_type"]:
+        for value in values:
+            try:
+                check_options({key: value})
+                seen["ok"] += 1
+            except PetscOptionError as err:
+                assert len(str(err)) > 20 and "\n" not in str(err), repr(err)
+                seen["error"] += 1
+    assert seen["error"] > 300 and seen["ok"] > 30
+
+
+# -- checkpoint corruption (issue 18) ---------------------------------------------------------
+@pytest.fixture(scope="module")
+def checkpointed(tmp_path_factory):
+    """A finished small-tube run (its last checkpoint kept) and its built scene."""
+    from test_reliability import small_tube
+
+    from fenics_garment.scene.run import run
+
+    result = run(small_tube(output={"vtx": False}), tmp_path_factory.mktemp("ck"), quiet=True)
+    return result
+
+
+def test_corrupted_checkpoints(checkpointed, tmp_path):
+    """Byte flips and truncations of progress.json and of the rank file: a ResumeError with a
+    message, or a checkpoint that loads (never another exception)."""
+    from fenics_garment.scene import checkpoint
+
+    src = checkpointed.folder
+    scene = config.load(src / "scene_used.toml")
+    folder = tmp_path / "run"
+    shutil.copytree(src / "checkpoint", folder / "checkpoint")
+    meta_path = folder / "checkpoint" / "progress.json"
+    (rank_file,) = (folder / "checkpoint").glob("state-*.r0.npz")
+    originals = {meta_path: meta_path.read_bytes(), rank_file: rank_file.read_bytes()}
+    rng = random.Random(18)
+    errors = 0
+    for i in range(80):
+        target = meta_path if i % 2 else rank_file
+        for p, data in originals.items():
+            p.write_bytes(data)
+        b = bytearray(originals[target])
+        if i % 4 < 2:
+            b = b[: rng.randrange(len(b))]
+        else:
+            for _ in range(rng.randint(1, 8)):
+                b[rng.randrange(len(b))] = rng.randrange(256)
+        target.write_bytes(bytes(b))
+        try:
+            meta = checkpoint.read(folder, scene, MPI.COMM_WORLD)
+            checkpoint.restore(checkpointed.built, folder, meta)
+        except checkpoint.ResumeError as err:
+            assert len(str(err)) > 20 and "\n" not in str(err), repr(err)
+            errors += 1
+    assert errors >= 40

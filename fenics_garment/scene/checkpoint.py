@@ -15,7 +15,11 @@ of checkpoint ``k`` are all in place before ``progress.json`` names ``k``, and t
 are removed after. A run killed at any moment therefore leaves a complete checkpoint or none.
 Resuming re-builds the scene (deterministic: same meshes, same partition on the same number of
 ranks), puts the arrays back and replays the remaining steps, so the answer is the one of the
-uninterrupted run. A different scene or number of ranks is refused with :class:`ResumeError`.
+uninterrupted run. A different scene or number of ranks is refused with :class:`ResumeError`,
+and so is a damaged checkpoint (truncated or missing rank files, unknown keys, values of the
+wrong type or shape): reading and restoring are collective, so every rank raises the same error.
+A checkpoint that cannot be written (full disk, read-only folder) raises
+:class:`~fenics_garment.output.OutputError` on every rank, leaving the previous one intact.
 """
 
 from __future__ import annotations
@@ -23,6 +27,9 @@ from __future__ import annotations
 import hashlib
 import io
 import json
+import math
+import zipfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -41,8 +48,10 @@ class ResumeError(ValueError):
 
 
 def fingerprint(scene: config.Scene) -> str:
-    """SHA-256 of the scene with every default filled in (the output folder excluded)."""
-    text = config.dumps(scene).split("\n", 1)[1]  # without the comment naming the source file
+    """SHA-256 of the scene with every default filled in, the output folder excluded (a run
+    folder may be moved); the error-bar switch is included (it changes what the run does)."""
+    plain = replace(scene, output=replace(scene.output, folder=""))
+    text = config.dumps(plain).split("\n", 1)[1]  # without the comment naming the source file
     return hashlib.sha256(text.encode()).hexdigest()[:16]
 
 
@@ -70,12 +79,11 @@ class Writer:
     def __init__(self, run_folder: Path, scene: config.Scene, comm: MPI.Comm, start: int = 0):
         self.folder = Path(run_folder) / FOLDER
         self.scene_id = fingerprint(scene)
+        self.error_bars = scene.output.error_bars
         self.comm = comm
         self.k = start
         self.seconds = 0.0
-        if comm.rank == 0:
-            self.folder.mkdir(parents=True, exist_ok=True)
-        comm.Barrier()
+        output.guarded(comm, lambda: self.folder.mkdir(parents=True, exist_ok=True))
 
     def write(self, built, progress: Progress) -> None:
         import time
@@ -89,33 +97,98 @@ class Writer:
             np.savez(buf, **_arrays(built))
             tmp.write_bytes(buf.getvalue())
 
-        output.atomic_write(path, save)
-        comm.Barrier()
-        if comm.rank == 0:
+        try:
+            output.guarded(comm, lambda: output.atomic_write(path, save), root_only=False)
             meta = {"format": FORMAT, "checkpoint": k, "ranks": comm.size,
-                    "scene": self.scene_id, "progress": progress.as_dict()}  # fmt: skip
-            output.write_text(self.folder / "progress.json", json.dumps(meta, indent=1))
-        comm.Barrier()
+                    "scene": self.scene_id, "error_bars": self.error_bars,
+                    "progress": progress.as_dict()}  # fmt: skip
+            text = json.dumps(meta, indent=1)
+            output.guarded(comm, lambda: output.write_text(self.folder / "progress.json", text))
+        except output.OutputError:
+            path.unlink(missing_ok=True)  # checkpoint k − 1 stays the valid one
+            raise
         old = _rank_file(self.folder, k - 1, comm.rank)
-        if old.exists():
-            old.unlink()
+        output.guarded(comm, lambda: old.unlink(missing_ok=True), root_only=False)
         self.k = k
         self.seconds += time.perf_counter() - t0
 
 
-def read(run_folder: Path, scene: config.Scene, comm: MPI.Comm) -> dict:
-    """The checkpoint's metadata, checked against ``scene`` and the number of ranks."""
+#: progress.json: key -> type.
+_META = {"format": int, "checkpoint": int, "ranks": int, "scene": str, "progress": dict}
+
+
+def _read_meta(run_folder: Path) -> dict:
+    """progress.json, checked (rank 0); raises ResumeError."""
     path = Path(run_folder) / FOLDER / "progress.json"
     if not path.exists():
         raise ResumeError(
             f"{run_folder}: no checkpoint to resume from ({path} is missing); "
             "run the scene from the start"
         )
+    damaged = f"{path}: damaged or not a checkpoint of this version"
+    again = "; run the scene from the start (or remove the folder)"
     try:
         meta = json.loads(path.read_text())
-        assert meta["format"] == FORMAT
-    except (ValueError, KeyError, AssertionError) as err:
-        raise ResumeError(f"{path}: not a checkpoint of this version ({err})") from None
+    except (OSError, ValueError) as err:
+        raise ResumeError(f"{damaged} ({type(err).__name__}: {err}){again}") from None
+    if not isinstance(meta, dict):
+        raise ResumeError(f"{damaged} (not a JSON object){again}")
+    for key, kind in _META.items():
+        if not isinstance(meta.get(key), kind) or isinstance(meta.get(key), bool):
+            raise ResumeError(f"{damaged} ({key!r} missing or not {kind.__name__}){again}")
+    if meta["format"] != FORMAT or meta["checkpoint"] < 1 or meta["ranks"] < 1:
+        raise ResumeError(f"{damaged} (format {meta['format']}, checkpoint "
+                          f"{meta['checkpoint']}, ranks {meta['ranks']}){again}")  # fmt: skip
+    try:
+        progress = Progress.from_dict(meta["progress"])
+        bad = _wrong_fields(progress) or _wrong_fields(progress.report)
+        bad = bad or next((b for st in progress.report.steps if (b := _wrong_fields(st))), "")
+    except (TypeError, KeyError, ValueError, AttributeError) as err:
+        raise ResumeError(f"{damaged} (its progress: {type(err).__name__} {err}){again}") from None
+    if bad or progress.stage not in STAGES:
+        raise ResumeError(f"{damaged} (progress {bad or 'stage ' + repr(progress.stage)}){again}")
+    return meta
+
+
+STAGES = ("grow", "release", "done")
+_SCALARS = {"float": (int, float), "int": (int,), "str": (str,), "bool": (bool,)}
+
+
+def _wrong_fields(obj) -> str:
+    """The first field of a dataclass whose value does not have its annotated scalar type, or
+    is not a list where a list is annotated; "" if none."""
+    from dataclasses import fields
+
+    for f in fields(obj):
+        v, kind = getattr(obj, f.name), str(f.type)
+        if kind in _SCALARS:
+            ok = isinstance(v, _SCALARS[kind]) and (kind == "bool" or not isinstance(v, bool))
+            ok = ok and (kind != "float" or math.isfinite(v) or math.isnan(v))
+        else:
+            ok = not kind.startswith("list") or isinstance(v, list)
+        if not ok:
+            return f"{f.name} = {v!r} (not {kind})"
+    return ""
+
+
+def _collective(comm: MPI.Comm, work):
+    """``work()`` on rank 0, its result or its ResumeError on every rank."""
+    result, message = None, None
+    if comm.rank == 0:
+        try:
+            result = work()
+        except ResumeError as err:
+            message = str(err)
+    result, message = comm.bcast((result, message), root=0)
+    if message:
+        raise ResumeError(message)
+    return result
+
+
+def read(run_folder: Path, scene: config.Scene, comm: MPI.Comm) -> dict:
+    """The checkpoint's metadata, checked against ``scene`` and the number of ranks
+    (collective)."""
+    meta = _collective(comm, lambda: _read_meta(run_folder))
     if meta["ranks"] != comm.size:
         raise ResumeError(
             f"{run_folder}: the checkpoint was written by {meta['ranks']} MPI rank(s), this run "
@@ -123,27 +196,65 @@ def read(run_folder: Path, scene: config.Scene, comm: MPI.Comm) -> dict:
             "--resume ...` (the mesh partition must be the same)"
         )
     if meta["scene"] != fingerprint(scene):
+        bars = meta.get("error_bars")
+        hint = (
+            " (the run was made with --error-bars: resume it with --error-bars, or "
+            "without a scene file)"
+            if bars is True and not scene.output.error_bars
+            else ""
+        )
         raise ResumeError(
             f"{run_folder}: the checkpoint belongs to another scene than the one given (the "
             "scene file changed since?); resume with the folder's own scene_used.toml, or run "
-            "the new scene from the start"
-        )
+            f"the new scene from the start{hint}"
+        )  # fmt: skip
     return meta
 
 
-def restore(built, run_folder: Path, meta: dict) -> Progress:
-    """Put the arrays of checkpoint ``meta`` back into ``built``; returns the progress."""
-    comm = built.model.geometry.mesh.comm
-    path = _rank_file(Path(run_folder) / FOLDER, meta["checkpoint"], comm.rank)
-    with np.load(path) as data:
-        saved = {k: data[k] for k in data.files}
-    for name, target in _arrays(built).items():
+def _load_rank_file(path: Path, targets: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """The arrays of one rank file, checked against the rebuilt scene's; raises ResumeError."""
+    again = "; run the scene from the start"
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            saved = {k: data[k] for k in data.files}
+    except FileNotFoundError:
+        raise ResumeError(f"{path}: missing (the checkpoint is incomplete){again}") from None
+    except (OSError, ValueError, EOFError, zipfile.BadZipFile, KeyError) as err:
+        raise ResumeError(f"{path}: damaged ({type(err).__name__}: {err}){again}") from None
+    for name, target in targets.items():
         if name in ("x0", "d0", "n0"):
             continue
-        if saved[name].shape != target.shape:
-            raise ResumeError(f"{path}: {name} has {saved[name].shape} values, the rebuilt "
-                              f"scene {target.shape}; run the scene from the start")  # fmt: skip
-        target[:] = saved[name]
+        if name not in saved:
+            raise ResumeError(f"{path}: has no {name!r} array{again}")
+        a = saved[name]
+        if a.shape != target.shape or a.dtype.kind not in "fi":
+            raise ResumeError(f"{path}: {name} has {a.shape} {a.dtype} values, the rebuilt "
+                              f"scene {target.shape}{again}")  # fmt: skip
+        if not np.all(np.isfinite(a)):
+            raise ResumeError(f"{path}: {name} holds NaN/Inf values{again}")
+    if any(k in saved for k in ("x0", "d0", "n0")):
+        if not all(k in saved for k in ("x0", "d0", "n0")):
+            raise ResumeError(f"{path}: the search arrays x0, d0, n0 are incomplete{again}")
+    return saved
+
+
+def restore(built, run_folder: Path, meta: dict) -> Progress:
+    """Put the arrays of checkpoint ``meta`` back into ``built``; returns the progress
+    (collective: a damaged file on any rank is a ResumeError on every rank)."""
+    comm = built.model.geometry.mesh.comm
+    path = _rank_file(Path(run_folder) / FOLDER, meta["checkpoint"], comm.rank)
+    targets = _arrays(built)
+    saved, message = None, None
+    try:
+        saved = _load_rank_file(path, targets)
+    except ResumeError as err:
+        message = str(err)
+    message = next((m for m in comm.allgather(message) if m), None)
+    if message:
+        raise ResumeError(message)
+    for name, target in targets.items():
+        if name not in ("x0", "d0", "n0"):
+            target[:] = saved[name]
     bp = built.contact.state._broad
     if "x0" in saved:
         bp._x0, bp._d0, bp._n0 = saved["x0"].copy(), saved["d0"].copy(), saved["n0"].copy()

@@ -151,9 +151,14 @@ GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
 #: The body kind each garment kind needs (the rest need a mannequin or a scan).
 GARMENT_BODY = {"tube": "cylinder", "sleeve": "arm"}
 #: Levels that a per-level ease may name, per garment kind (others are not checked).
+_TORSO = ("hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder", "neck_base",
+          "neck")  # fmt: skip
 EASE_LEVELS = {
     "sleeve": ("wrist", "forearm", "elbow", "upper_arm"),
     "stocking": ("ankle", "calf", "knee", "thigh"),
+    "gilet": _TORSO,
+    "dress": _TORSO,
+    "tube": ("bottom", "mid", "top"),
 }
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
@@ -326,7 +331,16 @@ def _check(s: Scene) -> None:
     _require(d.max_cuts >= 0, src, "dressing.max_cuts", f"must be >= 0, got {d.max_cuts}")
     _require(d.regularisation >= 0, src, "dressing.regularisation", "must be >= 0")
     _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
-    _require(bool(s.name) and "/" not in s.name, src, "name", "must be a non-empty file name")
+    _require(_plain_name(s.name), src, "name",
+             f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
+             f"got {s.name!r}")  # fmt: skip
+
+
+def _plain_name(name: str) -> bool:
+    """A name that makes one folder directly in the output root."""
+    bad = ("/", "\\")
+    printable = name.isprintable() and not any(c in name for c in bad)
+    return bool(name.strip()) and printable and name not in (".", "..") and len(name) <= 200
 
 
 # ------------------------------------------------------------------------------------------------

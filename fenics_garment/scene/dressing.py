@@ -27,7 +27,7 @@ import numpy as np
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import uzawa
-from fenics_garment.solve import NonlinearSolver
+from fenics_garment.solve import NONFINITE_REASON, NonlinearSolver, reason_name
 
 
 @dataclass
@@ -286,12 +286,14 @@ def dress(
         cuts += 1
         pr.step = ds / 2
         if cuts > max_cuts:
+            nan = ("; the residual was NaN/Inf: a material or load value too large for "
+                   "floating point?" if reason == NONFINITE_REASON else "")  # fmt: skip
             raise DressingFailed(
                 rep, s,
                 f"dressing stopped: Newton failed {cuts} times in a row going from shrink "
-                f"{s * 1e3:.3f} mm towards {target * 1e3:.3f} mm (last SNES reason {reason} "
-                f"after {its} iterations); the last converged state (shrink {s * 1e3:.3f} mm) "
-                "is kept",
+                f"{s * 1e3:.3f} mm towards {target * 1e3:.3f} mm (last SNES reason {reason}, "
+                f"{reason_name(reason)}, after {its} iterations); the last converged state "
+                f"(shrink {s * 1e3:.3f} mm) is kept{nan}",
             )  # fmt: skip
     if pr.stage == "grow":
         if mu is not None:

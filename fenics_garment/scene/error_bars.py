@@ -121,38 +121,107 @@ def run_with_error_bars(
     *,
     quiet: bool = False,
     comm: MPI.Comm = MPI.COMM_WORLD,
+    resume: str | Path | None = None,
     **kwargs,
 ):
     """Run ``scene`` on the meshes 2h then h; the fine run's summary and CSV get error bars.
 
-    The coarse run's own outputs go to ``<out>/<name>/coarse_level/``.
+    The coarse run's own outputs go to ``<out>/<name>/coarse_level/<name>/``. The whole run's
+    folder is locked meanwhile and its ``scene_used.toml`` records ``error_bars = true``, so
+    ``--resume`` of it continues both levels: a finished coarse level is read back from its
+    ``summary.json``, an interrupted one is resumed from its checkpoint, then the fine level.
     """
-    from fenics_garment.scene.run import run
+    from fenics_garment.scene import folder as run_folder
+    from fenics_garment.scene import preflight
 
     say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
-    root = Path(out_root if out_root is not None else scene.output.folder)
-    say(f"error bars: solving on the coarser garment mesh first "
-        f"(mesh_size {2 * scene.garment.mesh_size:g} m)")  # fmt: skip
-    coarse = run(coarse_scene(scene), root / scene.name / "coarse_level", quiet=True, comm=comm,
-                 **kwargs)  # fmt: skip
-    fine_scene = replace(scene, output=replace(scene.output, error_bars=False))
-    fine = run(fine_scene, root, quiet=quiet, comm=comm, **kwargs)
-    rows = attach(fine.regions, coarse.regions)
-    fine.summary["regions"] = rows
-    fine.summary["error_bars"] = {
-        "method": "Richardson, garment meshes h and 2h",
-        "rate": RATE,
-        "coarse_dofs": coarse.summary["dofs"],
-        "coarse_completed": coarse.completed,
-        "coarse_time_s": coarse.summary["time_s"]["total"],
-    }
-    if comm.rank == 0:
-        output.write_summary(fine.folder, fine.summary, rows)
-    comm.Barrier()
-    fine.regions = rows
+    if resume is not None:
+        folder = Path(resume)
+    else:
+        root = Path(out_root if out_root is not None else scene.output.folder)
+        folder = run_folder.inside(root, scene.name)
+    preflight.scene_limits(scene)
+    preflight.output_folder(folder, comm)
+    state = run_folder.RunFolder(folder, comm)
+    state.acquire()
+    try:
+        state.start(fresh=resume is None)
+        text = config.dumps(scene)
+        output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
+        say(f"error bars: solving on the coarser garment mesh first "
+            f"(mesh_size {2 * scene.garment.mesh_size:g} m)")  # fmt: skip
+        coarse = _coarse_level(scene, folder / run_folder.NESTED / scene.name, comm, kwargs)
+        fine = _fine_level(scene, folder, comm, quiet, kwargs)
+        _attach_bars(fine, coarse, state.run_id, comm)
+        state.finish("completed" if fine.completed and fine.checks_passed else
+                     "stopped" if not fine.completed else "checks failed")  # fmt: skip
+    except BaseException:
+        state.finish("failed", collective=False)
+        raise
+    finally:
+        state.release()
     say(f"  {'region':<12} {'p95 ± error':>16}  kPa   comfort range")
-    for r in rows:
+    for r in fine.regions:
         if r["contact_area_m2"] > 0:
             say(f"  {r['region']:<12} {r['p95_kPa']:7.2f} ± {r['p95_err_kPa']:5.2f}        "
                 f"{r['comfort_range']}")  # fmt: skip
     return fine
+
+
+def _has_checkpoint(folder: Path, comm: MPI.Comm) -> bool:
+    found = (folder / "checkpoint" / "progress.json").exists() if comm.rank == 0 else None
+    return bool(comm.bcast(found, root=0))
+
+
+def _finished_summary(folder: Path, comm: MPI.Comm) -> dict | None:
+    """The summary of a level whose run.json says it ended (completed or checks failed)."""
+    import json
+
+    summary = None
+    if comm.rank == 0:
+        try:
+            status = json.loads((folder / "run.json").read_text()).get("status")
+            if status in ("completed", "checks failed"):
+                summary = json.loads((folder / "summary.json").read_text())
+        except (OSError, ValueError, AttributeError):
+            summary = None
+    summary = comm.bcast(summary, root=0)
+    return summary if isinstance(summary, dict) and "regions" in summary else None
+
+
+def _coarse_level(scene: config.Scene, folder: Path, comm: MPI.Comm, kwargs: dict) -> dict:
+    """The coarse level's summary: read back when it finished, else resumed or run."""
+    from fenics_garment.scene.run import run
+
+    done = _finished_summary(folder, comm)
+    if done is not None:
+        return done
+    sc = coarse_scene(scene)
+    if _has_checkpoint(folder, comm):
+        return run(sc, quiet=True, comm=comm, resume=folder, **kwargs).summary
+    return run(sc, folder.parent, quiet=True, comm=comm, **kwargs).summary
+
+
+def _fine_level(scene: config.Scene, folder: Path, comm: MPI.Comm, quiet: bool, kwargs: dict):
+    """The fine level (recording the whole run's scene), resumed when it has a checkpoint."""
+    from fenics_garment.scene.run import run
+
+    fine = replace(scene, output=replace(scene.output, error_bars=False))
+    if _has_checkpoint(folder, comm):
+        return run(fine, quiet=quiet, comm=comm, resume=folder, record=scene, **kwargs)
+    return run(fine, folder.parent, quiet=quiet, comm=comm, record=scene, clear=False, **kwargs)
+
+
+def _attach_bars(fine, coarse: dict, run_id: str, comm: MPI.Comm) -> None:
+    rows = attach(fine.regions, coarse["regions"])
+    fine.summary["regions"] = rows
+    fine.summary["run_id"] = run_id
+    fine.summary["error_bars"] = {
+        "method": "Richardson, garment meshes h and 2h",
+        "rate": RATE,
+        "coarse_dofs": coarse["dofs"],
+        "coarse_completed": coarse["completed"],
+        "coarse_time_s": coarse["time_s"]["total"],
+    }
+    output.guarded(comm, lambda: output.write_summary(fine.folder, fine.summary, rows))
+    fine.regions = rows

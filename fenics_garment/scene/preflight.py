@@ -18,9 +18,11 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from pathlib import Path
 
 from fenics_garment._stack import MPI
+from fenics_garment.petsc_options import PetscOptionError, check_options
 
 #: Largest body facet size relative to the smallest body radius r: a chord h deviates from the
 #: circle by r(1 − cos(h/2r)) ≈ h²/(8r), i.e. 3 % of r at h = r/2 — the size of a typical
@@ -57,14 +59,17 @@ def _collective(comm: MPI.Comm, message: str | None) -> None:
 
 
 def output_folder(folder: Path, comm: MPI.Comm) -> None:
-    """Make ``folder`` (rank 0) and check that a file can be written in it."""
+    """Make ``folder`` (rank 0) and check that a file can be written in it and in its
+    ``checkpoint/`` if there is one (a resumed run writes there first)."""
     message = None
     if comm.rank == 0:
         try:
             folder.mkdir(parents=True, exist_ok=True)
-            probe = folder / f".write-test-{os.getpid()}"
-            probe.write_bytes(b"")
-            probe.unlink()
+            for where in (folder, folder / "checkpoint"):
+                if where.is_dir():
+                    probe = where / f".write-test-{os.getpid()}"
+                    probe.write_bytes(b"")
+                    probe.unlink()
         except OSError as err:
             why = err.strerror or type(err).__name__
             message = (f"cannot write the output folder {folder}: {why}"
@@ -89,8 +94,20 @@ def scene_limits(scene) -> None:
     if k > MAX_KAPPA_HAT:
         why = "the linear solves would lose every digit (default 10)"
         fail("physics.kappa_hat", f"= {k:g} is more than {MAX_KAPPA_HAT:g}: {why}")
+    if k < MIN_KAPPA_HAT and scene.physics.contact == "penalty":
+        why = (f"the garment would sink into the body by about {1.3 / k:.2g}× its own hoop "
+               "strain (default 10)")  # fmt: skip
+        fail("physics.kappa_hat", f"= {k:g} is less than {MIN_KAPPA_HAT:g}: {why}")
+    reg_limits(scene, fail)
+    fabric_limits(scene, fail)
+    try:
+        check_options(scene.solver.petsc)
+    except PetscOptionError as err:
+        raise PreflightError(f"{src}: {err}") from None
     if b.kind == "mannequin":
         mannequin_limits(scene)
+    if b.kind == "scan":
+        scan_file(scene, fail)
     area = BODY_AREA
     if b.kind == "cylinder":
         lo, hi = LENGTH_RANGE
@@ -103,14 +120,64 @@ def scene_limits(scene) -> None:
             fail("body.mesh_size", f"= {b.mesh_size:g} m is too coarse for a cylinder of radius "
                  f"{b.radius:g} m; use body.mesh_size <= {h_max:.3g} m")  # fmt: skip
         area = 2 * math.pi * b.radius * (b.length + 0.1 + b.radius)
-    for key, h in (("body.mesh_size", b.mesh_size), ("garment.mesh_size", g.mesh_size)):
-        h_min = math.sqrt(area / (math.sqrt(3) / 4 * MAX_TRIANGLES))
+    # the garment covers part of the body: a tube the cylinder's side, a sleeve or a stocking
+    # a limb; the body's whole area bounds the rest
+    garment_area = 2 * math.pi * b.radius * b.length if g.kind == "tube" else area
+    for key, h, a in (("body.mesh_size", b.mesh_size, area),
+                      ("garment.mesh_size", g.mesh_size, garment_area)):  # fmt: skip
+        h_min = math.sqrt(a / (math.sqrt(3) / 4 * MAX_TRIANGLES))
         if h < h_min:
             n = MAX_TRIANGLES * (h_min / h) ** 2 if h > 1e-150 else math.inf
             fail(key, f"= {h:g} m would make about {n:.2g} triangles (at most "
                  f"{MAX_TRIANGLES:.0e}); use mesh_size >= {h_min:.2g} m")  # fmt: skip
         if h > 1.0:
             fail(key, f"= {h:g} m is larger than a body; use a few centimetres")
+
+
+#: Smallest penalty scale κ̂ of the plain penalty (the augmented Lagrangian corrects a soft one):
+#: the penetration grows like 1/κ̂ (0.17 h at 10 on the tight tube), so below this the garment
+#: sinks into the body by many times its thickness.
+MIN_KAPPA_HAT = 0.1
+#: Range of dressing.regularisation (c₀ relative to A/ℓ², default 1e-2): 0 leaves the garment
+#: with no support at all while the body grows (friction is off then, and a scene has no
+#: boundary conditions), so Newton meets a singular Jacobian or the garment drifts off; above
+#: 1 the spring is as stiff as the contact and is not released.
+REG_RANGE = (1e-4, 1.0)
+#: Largest fabric values (moduli in Pa, bending rigidity in N·m, thickness in m, density in
+#: kg/m³): beyond them a "fabric" is steel-like or worse and the residual overflows.
+FABRIC_MAX = {"E_warp": 1e12, "E_weft": 1e12, "G12": 1e12, "B_warp": 1e3, "B_weft": 1e3,
+              "thickness": 0.05, "density": 1e5}  # fmt: skip
+
+
+def reg_limits(scene, fail: Callable[[str, str], None]) -> None:
+    lo, hi = REG_RANGE
+    r = scene.dressing.regularisation
+    if not lo <= r <= hi:
+        why = (
+            "nothing would hold the garment while the body grows (friction is off then)"
+            if r < lo
+            else "the spring would be as stiff as the contact and never released"
+        )
+        fail("dressing.regularisation", f"= {r:g} is outside [{lo:g}, {hi:g}]: {why} "
+             "(default 0.01)")  # fmt: skip
+
+
+def scan_file(scene, fail: Callable[[str, str], None]) -> None:
+    """The scan file exists (checked on every rank: only rank 0 reads it)."""
+    path = Path(scene.body.file)
+    if not path.is_absolute() and scene.source:
+        path = Path(scene.source).parent / path
+    if not path.is_file():
+        fail("body.file", f"= {scene.body.file!r}: no such file {path} (a relative path is "
+             "relative to the scene file's folder)")  # fmt: skip
+
+
+def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
+    for k, v in scene.garment.fabric_overrides.items():
+        top = FABRIC_MAX.get(k)
+        if top is not None and v > top:
+            fail(f"garment.fabric_overrides.{k}", f"= {v:g} is more than {top:g}: not a "
+                 "fabric (the forces would overflow floating point)")  # fmt: skip
 
 
 #: Levels a garment kind needs inside the mannequin's crop (z_range) and on the body.

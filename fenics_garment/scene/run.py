@@ -18,7 +18,11 @@ One output folder per run, ``<output.folder>/<name>/``:
 from __future__ import annotations
 
 import math
+import os
+import re
+import shutil
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -29,12 +33,14 @@ from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.scene import build as scene_build
-from fenics_garment.scene import checkpoint, config, preflight
+from fenics_garment.scene import checkpoint, checks, config, preflight
+from fenics_garment.scene import folder as run_folder
 from fenics_garment.scene.dressing import (
     RELEASE_TOLERANCE,
     DressingFailed,
     DressReport,
     DressStep,
+    Progress,
     dress,
 )
 from fenics_garment.shell.energy import membrane_forces
@@ -57,6 +63,12 @@ class RunResult:
     built: object = field(repr=False)
     completed: bool = True
     message: str = ""
+    checks: list[checks.Check] = field(default_factory=list)
+    fields: dict = field(default_factory=dict, repr=False)  # final arrays behind the files
+
+    @property
+    def checks_passed(self) -> bool:
+        return all(c.ok for c in self.checks)
 
 
 def _membrane_strain(model) -> dolfinx.fem.Function:
@@ -123,17 +135,67 @@ class _Frames:
         n = len(self.scalars)
         for k, f in enumerate(self.scalars):  # same P2 nodes: the blocked space's k-th component
             f.x.array[:] = self.packed.x.array[k::n]
-        self.writer.write(float(self.k))
+        self._guarded(lambda: self.writer.write(float(self.k)))
         self.k += 1
+
+    def _guarded(self, work) -> None:
+        """``work()`` on the ADIOS2 writer; a failure on any rank (a full disk: ADIOS2 raises a
+        RuntimeError) is an OutputError on every rank, with the partial series removed."""
+        comm = self.built.model.geometry.mesh.comm
+        message = None
+        try:
+            work()
+        except RuntimeError as err:
+            message = _adios_reason(str(err), self.tmp)
+        message = next((m for m in comm.allgather(message) if m), None)
+        if message is None:
+            return
+        # The writer's destructor flushes again; on a disk still full it would fail again and
+        # abort the process. So its files are emptied (which frees their space although
+        # ADIOS2 keeps them open), it is closed, and the partial series removed; a writer that
+        # cannot even close then is kept alive (with its emptied folder) until the process ends.
+        writer, self.writer = self.writer, None
+        if comm.rank == 0:
+            _empty(self.tmp)
+        comm.Barrier()
+        try:
+            writer.close()
+            closed = True
+        except RuntimeError:
+            _ABANDONED.append(writer)
+            closed = False
+        if comm.allreduce(closed, op=MPI.LAND) and comm.rank == 0:
+            shutil.rmtree(self.tmp, ignore_errors=True)
+        raise output.OutputError(message)
 
     def close(self, comm: MPI.Comm) -> None:
         if self.writer is None:
             return
-        self.writer.close()
+        self._guarded(self.writer.close)
         comm.Barrier()
         if comm.rank == 0:
             output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp))
         comm.Barrier()
+
+
+#: VTX writers that failed (kept alive: see ``_Frames._guarded``).
+_ABANDONED: list = []
+
+
+def _empty(folder: Path) -> None:
+    for f in folder.glob("*"):
+        try:
+            os.truncate(f, 0)
+        except OSError:
+            pass
+
+
+def _adios_reason(text: str, path: Path) -> str:
+    """One line from an ADIOS2 exception: the errno's reason when there is one."""
+    plain = re.sub(r"\x1b\[[0-9;]*m", "", text)
+    m = re.search(r"errno = (\d+)", plain)
+    why = os.strerror(int(m.group(1))) if m else " ".join(plain.split())[:200]
+    return f"cannot write {path}: {why}"
 
 
 def _write_xdmf(folder: Path, garment, fields: dict[str, np.ndarray]) -> None:
@@ -213,37 +275,93 @@ def run(
     first_step: float | None = None,
     resume: str | Path | None = None,
     checkpoints: bool = True,
+    record: config.Scene | None = None,
+    clear: bool = True,
 ) -> RunResult:
     """Build, dress and write every output of ``scene`` (see the module doc).
 
     ``first_step`` (a fraction of the initial shrink) overrides the first dressing step.
     A dressing that fails after its step cuts still writes the outputs of the last converged
-    state; the result then has ``completed = False`` and the reason in ``message``.
+    state; the result then has ``completed = False`` and the reason in ``message``. Every
+    result carries its checks (``scene.checks``; ``checks_passed``).
     ``checkpoints``: write ``checkpoint/`` after every converged solve (``scene.checkpoint``);
     ``resume``: the folder of an interrupted run of ``scene``, continued from its checkpoint
-    (:class:`~fenics_garment.scene.checkpoint.ResumeError` if it has none or another scene).
+    (:class:`~fenics_garment.scene.checkpoint.ResumeError` if it has none, another scene, or a
+    damaged one). The folder is locked while the run writes it, a fresh run first removes an
+    earlier run's outputs (``clear``), and ``run.json`` records its id and state
+    (``scene.folder``). ``record``: the scene written to ``scene_used.toml`` and fingerprinted
+    in the checkpoints (default ``scene``; the error bars' fine level records the whole run).
     Raises :class:`~fenics_garment.scene.preflight.PreflightError` before any solve when the
-    output folder cannot be written or the scene cannot be dressed (``scene.preflight``).
+    output folder cannot be written or the scene cannot be dressed (``scene.preflight``), and
+    :class:`~fenics_garment.output.OutputError` when a file cannot be written mid-run.
     """
-    if scene.output.error_bars and resume is None:  # two mesh levels (scene.error_bars)
+    if scene.output.error_bars and record is None:  # two mesh levels (scene.error_bars)
         from fenics_garment.scene.error_bars import run_with_error_bars
 
-        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm,
+        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm, resume=resume,
                                    first_step=first_step, checkpoints=checkpoints)  # fmt: skip
-    t_start = time.perf_counter()
-    say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
-    folder = Path(out_root if out_root is not None else scene.output.folder) / scene.name
+    recorded = record or scene
+    preflight.scene_limits(scene)
     meta = None
     if resume is not None:
         folder = Path(resume)
-        meta = checkpoint.read(folder, scene, comm)
-    preflight.scene_limits(scene)
+        meta = checkpoint.read(folder, recorded, comm)
+    else:
+        folder = run_folder.inside(Path(out_root if out_root is not None else
+                                        scene.output.folder), scene.name)  # fmt: skip
     preflight.output_folder(folder, comm)
-    if comm.rank == 0:
-        output.write_text(folder / "scene_used.toml", config.dumps(scene))
-    comm.Barrier()
-    times: dict[str, float] = {}
+    state = run_folder.RunFolder(folder, comm)
+    state.acquire()
+    try:
+        state.start(fresh=meta is None, clear=clear)
+        result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
+                         checkpoints=checkpoints)  # fmt: skip
+    except output.OutputError as err:
+        state.finish("failed", collective=False)
+        err.folder = err.folder or folder
+        raise
+    except BaseException:
+        state.finish("failed", collective=False)
+        raise
+    finally:
+        state.release()
+    return result
 
+
+#: Exit codes of a run (the CLI's): done; the dressing stopped (last converged state written);
+#: done but a result check failed (a WARNING each; outputs written, ``summary.json`` checks).
+EXIT_DONE, EXIT_STOPPED, EXIT_CHECKS = 0, 3, 4
+
+
+def exit_code(result: RunResult) -> int:
+    if not result.completed:
+        return EXIT_STOPPED
+    return EXIT_DONE if result.checks_passed else EXIT_CHECKS
+
+
+def _status(result: RunResult) -> str:
+    if not result.completed:
+        return "stopped"
+    return "completed" if result.checks_passed else "checks failed"
+
+
+def _run_in(
+    state: run_folder.RunFolder,
+    scene: config.Scene,
+    recorded: config.Scene,
+    meta: dict | None,
+    *,
+    quiet: bool,
+    first_step: float | None,
+    checkpoints: bool,
+) -> RunResult:
+    """The run itself, in its locked folder."""
+    folder, comm = state.path, state.comm
+    t_start = time.perf_counter()
+    say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
+    text = config.dumps(recorded)
+    output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
+    times: dict[str, float] = {}
     t0 = time.perf_counter()
     say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
         f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
@@ -255,7 +373,7 @@ def run(
         say("  " + warning)
     if meta is None:
         preflight.check_built(built)
-
+    tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
@@ -263,6 +381,53 @@ def run(
                              petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    progress = None
+    if meta is not None:
+        progress = checkpoint.restore(built, folder, meta)
+        frames.k = len(progress.report.steps)
+        say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
+            f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
+    ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0)
+    report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
+                                        progress, first_step, say)  # fmt: skip
+    times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
+    times["checkpoint"] = ckpt.seconds
+    say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
+        f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
+    _say_release(say, built, report, completed)
+    if completed:
+        frames.write()
+    t0 = time.perf_counter()
+    frames.close(comm)
+    result = _outputs(built, solver, report, (completed, message), tight, times)
+    times["outputs"] = time.perf_counter() - t0
+    times["total"] = time.perf_counter() - t_start
+    result.summary["run_id"] = state.run_id
+    _write_outputs(folder, built, result)
+    state.finish(_status(result))
+    _print_regions(say, result.regions)
+    for c in result.checks:
+        if not c.ok:
+            say("  " + c.warning())
+    say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
+    return result
+
+
+def _dress(
+    built: scene_build.Built,
+    solver: NonlinearSolver,
+    frames: _Frames,
+    ckpt: checkpoint.Writer | None,
+    progress: Progress | None,
+    first_step: float | None,
+    say: Callable[..., object],
+) -> tuple[DressReport, bool, str]:
+    """The dressing with its progress lines: (report, completed, message)."""
+    scene = built.scene
+    d, p = scene.dressing, scene.physics
+    h = built.model.stiffness.thickness  # the tolerance is a fraction of it
+    al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
 
     def on_step(rec: DressStep) -> None:
         frames.write()
@@ -272,37 +437,24 @@ def run(
         say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
 
     def on_failure(target: float, its: int, reason: int) -> None:
-        say(
-            f"  shrink → {target * 1e3:6.2f} mm failed (SNES reason {reason}, {its} its): "
-            "halving the step"
-        )
+        say(f"  shrink → {target * 1e3:6.2f} mm failed (SNES reason {reason}, {its} its): "
+            "halving the step")  # fmt: skip
 
-    d = scene.dressing
-    p = scene.physics
-    h = built.model.stiffness.thickness
-    al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
-    t0 = time.perf_counter()
-    progress = None
-    if meta is not None:
-        progress = checkpoint.restore(built, folder, meta)
-        frames.k = len(progress.report.steps)
-        say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
-            f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
-    ckpt = checkpoint.Writer(folder, scene, comm, meta["checkpoint"] if meta else 0)
-    write_ckpt = (lambda pr: ckpt.write(built, pr)) if checkpoints else None
-    completed, message = True, ""
+    write_ckpt = (lambda pr: ckpt.write(built, pr)) if ckpt is not None else None
     try:
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
                        on_failure=on_failure, augmented_lagrangian=al,
                        on_checkpoint=write_ckpt, resume=progress)  # fmt: skip
     except DressingFailed as err:
-        report, completed, message = err.report, False, str(err)
-        say("  " + message)
-    times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
-    times["checkpoint"] = ckpt.seconds
-    say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
-        f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
+        say("  " + str(err))
+        return err.report, False, str(err)
+    return report, True, ""
+
+
+def _say_release(
+    say: Callable[..., object], built: scene_build.Built, report: DressReport, completed: bool
+) -> None:
     effect = report.regularisation_effect
     grew_only = not any(step.stage == "release" for step in report.steps)
     if not completed and grew_only and report.final_regularisation == 0.0:
@@ -325,11 +477,20 @@ def run(
     else:
         say(f"  stabilising spring fully released; its last stage changed the pressure by "
             f"{effect:.2%}")  # fmt: skip
-    if completed:
-        frames.write()
 
-    t0 = time.perf_counter()
-    frames.close(comm)
+
+def _outputs(
+    built: scene_build.Built,
+    solver: NonlinearSolver,
+    report: DressReport,
+    outcome: tuple[bool, str],
+    tight: float,
+    times: dict[str, float],
+) -> RunResult:
+    """Fields, measures, checks and the summary of the final state (collective)."""
+    completed, message = outcome
+    scene = built.scene
+    comm = built.model.geometry.mesh.comm
     strain = _membrane_strain(built.model)
     st = built.contact.state
     p_lumped = cpressure.body_pressure(st, built.contact.traction, built.search_body)
@@ -340,13 +501,16 @@ def run(
     p_body = cpressure.body_pressure_map(built.contact.pressure(), built.model.displacement(),
                                          built.body.vertices, reach)  # fmt: skip
     measures = _contact_measures(built)
+    applied, reaction = checks.forces(built)
+    found = checks.result_checks(built, measures, report.spring_traction, tight,
+                                 (applied, reaction))  # fmt: skip
     max_strain = comm.allreduce(float(strain.x.array.max()), op=MPI.MAX)
-    times["outputs"] = time.perf_counter() - t0
-    times["total"] = time.perf_counter() - t_start
     summary = {
         "scene": scene.name,
         "completed": completed,
         "message": message,
+        "checks_passed": all(c.ok for c in found),
+        "checks": {c.name: c.as_dict() for c in found},
         "garment": scene.garment.kind,
         "fabric": scene.garment.fabric,
         "element": scene.garment.element,
@@ -357,6 +521,8 @@ def run(
         "body_triangles_dropped": built.search_body.dropped,  # outside the garment's reach
         "ranks": comm.size,
         **measures,
+        "tight_area_m2": tight,  # of the pattern inside the body at the start
+        "forces_N": {"applied": applied.tolist(), "reaction": reaction.tolist()},
         "max_membrane_strain": max_strain,
         "dressing": report.as_dict(),
         "time_s": times,
@@ -366,20 +532,27 @@ def run(
         "contact_search_s": st.timings.search_s,
         "regions": regions,
     }
-    if comm.rank == 0:
+    fields = {"x_g": x_g, "p_g": p_g, "eps_g": eps_g, "p_body": p_body, "p_lumped": p_lumped}
+    return RunResult(Path(), summary, regions, report, built, completed, message, found, fields)
+
+
+def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) -> None:
+    """The files of rank 0 (a write failure is an OutputError on every rank)."""
+    scene, f = built.scene, result.fields
+    result.folder = folder
+
+    def write() -> None:
         if scene.output.xdmf:
-            _write_xdmf(folder, built.garment, {"displacement": x_g - built.garment.points,
-                                                "contact_pressure": p_g,
-                                                "membrane_strain_max": eps_g})  # fmt: skip
-        output.write_summary(folder, summary, regions)
-        _write_body_vtu(folder, built.body, {"contact_pressure": p_body,
-                                             "contact_pressure_lumped": p_lumped})  # fmt: skip
+            _write_xdmf(folder, built.garment, {"displacement": f["x_g"] - built.garment.points,
+                                                "contact_pressure": f["p_g"],
+                                                "membrane_strain_max": f["eps_g"]})  # fmt: skip
+        output.write_summary(folder, result.summary, result.regions)
+        _write_body_vtu(folder, built.body, {"contact_pressure": f["p_body"],
+                                             "contact_pressure_lumped": f["p_lumped"]})  # fmt: skip
         if scene.output.pictures:
-            _pictures(folder, built, (x_g, p_g), p_body)
-    comm.Barrier()
-    _print_regions(say, regions)
-    say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
-    return RunResult(folder, summary, regions, report, built, completed, message)
+            _pictures(folder, built, (f["x_g"], f["p_g"]), f["p_body"])
+
+    output.guarded(built.model.geometry.mesh.comm, write)
 
 
 def garment_arrays(built) -> tuple[np.ndarray, np.ndarray]:

@@ -1,0 +1,200 @@
+"""The state of a run folder: one writer at a time, no stale outputs, a completed marker.
+
+* ``.lock`` — made with ``O_EXCL`` by the run writing the folder (its host, pid and run id). A
+  second run into the same folder is refused (:class:`FolderBusy`) while the first lives; a lock
+  left by a killed run (same host, process gone) is taken over.
+* A fresh run (not ``--resume``) first removes the outputs an earlier run left (only the files
+  and folders this package writes), so a killed re-run cannot leave its new ``scene_used.toml``
+  beside an old, complete-looking ``summary.json``.
+* ``run.json`` — ``run_id`` (also in ``summary.json``), ``status`` (``running``, then
+  ``completed``, ``checks failed``, ``stopped`` or ``failed``), start and end time, ranks, and for
+  a resumed run the id it continued. ``status = completed`` is written last, after every output:
+  it is the completed marker.
+
+Only rank 0 touches the files; the answers are broadcast (every rank raises the same error).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import time
+import uuid
+from pathlib import Path
+
+from fenics_garment import output
+from fenics_garment._stack import MPI
+from fenics_garment.scene.preflight import PreflightError
+
+STATE = "run.json"
+LOCK = ".lock"
+#: What a run writes into its folder (a fresh run removes these, nothing else).
+OUTPUT_FILES = ("summary.json", "pressure_regions.csv", "final_state.xdmf", "body_pressure.vtu",
+                "pressure_garment.png", "pressure_body.png", "scene_used.toml", STATE)  # fmt: skip
+OUTPUT_DIRS = ("dressing.bp", "checkpoint")
+NESTED = "coarse_level"  # the error bars' coarse run, a run folder of its own
+
+
+class FolderBusy(PreflightError):
+    """Another live run is writing the folder."""
+
+
+def _alive(pid: int) -> bool:
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True
+
+
+def _holder(lock: Path) -> dict:
+    try:
+        return json.loads(lock.read_text())
+    except (OSError, ValueError):
+        return {}
+
+
+def _take(lock: Path, me: dict) -> str | None:
+    """Make the lock file; None, or why not (a live holder)."""
+    for _ in range(2):
+        try:
+            fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+        except FileExistsError:
+            held = _holder(lock)
+            pid, host = held.get("pid"), held.get("host")
+            if held and host == me["host"] and pid == me["pid"]:
+                return None  # this process holds it (the error bars' fine level): nested
+
+            if held and host == me["host"] and isinstance(pid, int) and not _alive(pid):
+                lock.unlink(missing_ok=True)  # left by a killed run
+                continue
+            if not held and time.time() - lock.stat().st_mtime > 60:
+                lock.unlink(missing_ok=True)  # empty and old: its writer died before writing
+                continue
+            who = f"pid {pid} on {host}" if held else "an unknown process"
+            return (f"another run ({who}, run id {held.get('run_id', '?')}) is writing "
+                    f"{lock.parent}; wait for it to end or choose another -o/--output (if that "
+                    f"run is dead, remove {lock})")  # fmt: skip
+        with os.fdopen(fd, "w") as f:
+            f.write(json.dumps(me))
+        return None
+    return f"cannot take the lock {lock}"
+
+
+def _clear(folder: Path) -> None:
+    for name in OUTPUT_FILES:
+        (folder / name).unlink(missing_ok=True)
+    for name in OUTPUT_DIRS:
+        if (folder / name).is_dir():
+            shutil.rmtree(folder / name)
+    nested = folder / NESTED
+    if nested.is_dir():
+        for sub in nested.iterdir():
+            if sub.is_dir() and ((sub / STATE).exists() or (sub / "scene_used.toml").exists()):
+                _clear(sub)
+                if not any(sub.iterdir()):
+                    sub.rmdir()
+        if not any(nested.iterdir()):
+            nested.rmdir()
+    for stray in folder.glob(".*.part*"):  # temporary files of a killed writer
+        if stray.is_dir():
+            shutil.rmtree(stray)
+        else:
+            stray.unlink(missing_ok=True)
+
+
+class RunFolder:
+    """The lock and the state file of one run's folder (collective: every rank calls)."""
+
+    def __init__(self, path: Path, comm: MPI.Comm):
+        self.path, self.comm = Path(path), comm
+        self.run_id = comm.bcast(uuid.uuid4().hex[:12] if comm.rank == 0 else None, root=0)
+        self.state: dict = {}
+        self._locked = False
+
+    def _collective(self, work) -> None:
+        """Run ``work()`` on rank 0; its error message (if any) is raised on every rank."""
+        message, busy = None, False
+        if self.comm.rank == 0:
+            try:
+                message = work()
+                busy = message is not None
+            except OSError as err:
+                message = f"cannot write the run folder {self.path}: {err.strerror or err}"
+        message, busy = self.comm.bcast((message, busy), root=0)
+        if message:
+            raise (FolderBusy if busy else PreflightError)(message)
+
+    def acquire(self) -> None:
+        me = {"pid": os.getpid(), "host": socket.gethostname(), "run_id": self.run_id,
+              "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}  # fmt: skip
+        self._collective(lambda: _take(self.path / LOCK, me))
+        self._locked = True
+
+    def release(self) -> None:
+        if self._locked and self.comm.rank == 0:
+            lock = self.path / LOCK
+            if _holder(lock).get("run_id") == self.run_id:
+                lock.unlink(missing_ok=True)
+        self._locked = False
+
+    def start(self, *, fresh: bool, clear: bool = True) -> None:
+        """Clear an earlier run's outputs (``fresh`` and ``clear``) and mark the folder running."""
+        previous = self.read_state().get("run_id") if not fresh else None
+
+        def work() -> None:
+            if fresh and clear:
+                _clear(self.path)
+            self.state = {"run_id": self.run_id, "status": "running", "ranks": self.comm.size,
+                          "started": time.strftime("%Y-%m-%dT%H:%M:%S%z")}  # fmt: skip
+            if previous:
+                self.state["resumed_from"] = previous
+            self._write()
+
+        self._collective(work)
+
+    def finish(self, status: str, *, collective: bool = True) -> None:
+        """Write the final ``status``. ``collective=False`` (on an error path, where the other
+        ranks may be anywhere): rank 0 only, best effort, never raises."""
+
+        def work() -> None:
+            self.state.update(status=status, finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
+            self._write()
+
+        if collective:
+            self._collective(work)
+        elif self.comm.rank == 0 and self.state:
+            try:
+                work()
+            except OSError:
+                pass
+
+    def read_state(self) -> dict:
+        text = None
+        if self.comm.rank == 0:
+            try:
+                text = (self.path / STATE).read_text()
+            except OSError:
+                text = None
+        text = self.comm.bcast(text, root=0)
+        try:
+            state = json.loads(text) if text else {}
+        except ValueError:
+            state = {}
+        return state if isinstance(state, dict) else {}
+
+    def _write(self) -> None:
+        output.write_text(self.path / STATE, json.dumps(self.state, indent=1))
+
+
+def inside(root: Path, name: str) -> Path:
+    """``root/name``, refused (PreflightError) when it is not a folder directly in ``root``."""
+    folder = Path(root) / name
+    if folder.resolve().parent != Path(root).resolve():
+        raise PreflightError(f"the scene name {name!r} would put the run folder outside "
+                             f"{root} ({folder.resolve()}); use a plain file name")  # fmt: skip
+    return folder
