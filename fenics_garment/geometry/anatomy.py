@@ -49,6 +49,8 @@ IArray = npt.NDArray[np.int64]
 ARM_JUMP = 0.02
 #: girth ratio over the neck girth where the head (jaw) begins
 HEAD_FLARE = 1.25
+#: landmark levels a scene may override (heights in metres above the floor)
+LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
 PARTS = {"torso": 0, "head": 1, "arm_left": 2, "arm_right": 3, "leg_left": 4, "leg_right": 5}
 
@@ -179,6 +181,7 @@ def analyse(
             armpit[side], cut[side] = z_ap, float(p[0])
             pts[f"armpit_{side}"] = np.array([p[0], p[1], z_ap])
             pts[f"shoulder_{side}"] = np.array([p[0], p[1], top])
+            pts[f"arm_root_{side}"] = _arm_root_box(v, t, float(p[0]), z_ap, top)
     if len(armpit) == 1:
         missing = ({"left", "right"} - set(armpit)).pop()
         raise ScanError(
@@ -249,6 +252,21 @@ def _arm_root(
     if o is None:
         return None
     return z_ap, o.points[np.argmax(sgn * o.points[:, 0])]
+
+
+def _arm_root_box(v: Array, t: IArray, x: float, z_ap: float, z_top: float) -> Array:
+    """(y_min, y_max, z_min, z_max) of the arm root: the outline of the body's section by the
+    vertical plane through the armpit (x = const) that contains the point half-way up between
+    armpit and shoulder point, above the armpit."""
+    vv = v[:, [1, 2, 0]]  # (y, z, x): slice_loops cuts at constant third coordinate
+    z_mid = 0.5 * (z_ap + z_top)
+    loops = [p for p in sec.slice_loops(vv, t, x) if len(p) > 2]
+    inside = [p for p in loops if p[:, 1].min() <= z_mid <= p[:, 1].max()]
+    if not inside:
+        return np.array([np.nan, np.nan, z_ap, z_top])
+    p = max(inside, key=lambda q: abs(sec.polygon_area(q)))
+    p = p[p[:, 1] >= z_ap - 1e-3]
+    return np.array([p[:, 0].min(), p[:, 0].max(), z_ap, z_top])
 
 
 def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[float, float | None]:

@@ -42,7 +42,10 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
             path = Path(b.file)
             if not path.is_absolute() and scene.source:
                 path = Path(scene.source).parent / path
-            body, _ = load_scan(path, units=b.units or None, remesh=b.mesh_size)
+            body, _ = load_scan(path, units=b.units or None, up=b.up or None,
+                                max_hole_edges=b.max_hole_edges, scale=b.scale or None,
+                                remesh=b.mesh_size if b.remesh else None,
+                                landmarks=dict(b.landmarks) or None)  # fmt: skip
         else:
             from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
             from fenics_garment.geometry.measurements import measurements
