@@ -233,3 +233,27 @@ def test_units_and_scale_given(tmp_path):
         clean_surface(v, t, units="ft")
     with pytest.raises(ScanError, match="unknown up axis 'w'"):
         clean_surface(v, t, up="w")
+
+
+@pytest.mark.slow
+def test_gilet_on_the_scan_body(scan):
+    """The gilet is cut from the segmented body: armholes at the arm roots, no overshoot, and
+    nowhere deep inside the body (libigl's exact signed distance as the reference)."""
+    import igl
+
+    from fenics_garment.geometry import garments as gm
+
+    body, _ = scan
+    g = gm.make_gilet(body, h=0.03)  # check_garment ran inside: bounded, no fold
+    for side in ("left", "right"):
+        p = g.points[np.unique(g.edge_nodes[f"armhole_{side}"])]
+        cut = body.arm_cut[side]
+        assert np.all(np.abs(p[:, 0] - cut) < 0.05), side  # around the arm root plane
+        assert p[:, 2].min() < body.landmarks["armpit"]  # reaching below the armpit
+        root = body.points[f"arm_root_{side}"]
+        assert np.ptp(p[:, 1]) > 0.8 * (root[1] - root[0])  # most of the arm root's depth
+    dist = igl.signed_distance(g.points, body.vertices, body.triangles.astype(np.int64))[0]
+    # the default ease is ≥ 2 %: the loft between levels may dip into the breasts a little
+    # (measured 17 mm with -2 % at the bust), never through an arm (35 mm before the arm-root
+    # armholes)
+    assert dist.min() > -0.02

@@ -216,6 +216,7 @@ def analyse(
     marks.update(leg_levels(v, t, crotch, H))
     if overrides:
         marks.update(overrides)
+    marks = {k: float(z) for k, z in marks.items()}
     check_order(marks)
     part = body_parts(v, t, marks, cut)
     girths = {k: girth(marks[k]) for k in TORSO_LEVELS if k in marks and k != "crotch"}
