@@ -165,12 +165,23 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     gravity = model.add_gravity() if p.gravity else None
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
     sbody = search.BodySurface(body.vertices, body.triangles, keep=keep)  # cropped search body
-    contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model),
+    contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
+                                   kappa_hat=p.kappa_hat, rule=_rule(model),
                                    mu=p.friction if p.friction > 0 else None)  # fmt: skip
     mu = contact.friction.mu if contact.friction else None
     c0 = scene.dressing.regularisation / p.kappa_hat * float(contact.kappa.value)
     reg = add_regularisation(model, c0)
     return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
+
+
+def tissue_stiffness(scene: Scene) -> float | None:
+    """Contact stiffness [Pa/m] of a soft body (``body.tissue = "soft"``): the Winkler layer of
+    :class:`~fenics_garment.contact.terms.SoftTissue` with the seed paper's Table 1 modulus and
+    Poisson ratio over ``body.tissue_depth``; None for a rigid body (the numerical penalty)."""
+    from fenics_garment.contact.terms import SoftTissue
+
+    b = scene.body
+    return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
 
 
 def _rule(model: ShellModel) -> str:

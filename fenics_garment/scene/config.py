@@ -70,6 +70,11 @@ class BodyConfig:
     max_hole_edges: int = 40  # scan: holes up to this many boundary edges are filled
     remesh: bool = False  # scan: remesh with gmsh at mesh_size (false: keep its triangles)
     landmarks: dict[str, float] = field(default_factory=dict)  # scan: heights [m] to override
+    # "rigid", or "soft": a Winkler layer of soft tissue of tissue_depth [m] over a rigid core,
+    # with the seed paper's Table 1 body modulus and Poisson ratio (contact.terms.SoftTissue);
+    # the contact stiffness is then the tissue's, not a numerical penalty
+    tissue: str = "rigid"
+    tissue_depth: float = 0.02  # [m] our assumption: the paper gives no depth
     radius: float = 0.1  # cylinder radius [m]
     length: float = 0.2  # cylinder length [m]
 
@@ -161,6 +166,7 @@ EASE_LEVELS = {
 }
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
+TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2", "P2-P2", "P1-P1")
 
 
@@ -294,6 +300,11 @@ def _check(s: Scene) -> None:
             if k not in LANDMARKS:
                 raise _unknown(k, list(LANDMARKS), "body.landmarks", src)
             _require(v > 0, src, f"body.landmarks.{k}", f"must be a height > 0 [m], got {v}")
+    _one_of(b.tissue, TISSUES, src, "body.tissue")
+    _require(b.tissue_depth > 0, src, "body.tissue_depth",
+             f"must be positive, got {b.tissue_depth}")  # fmt: skip
+    _require(b.tissue != "soft" or s.physics.contact == "penalty", src, "physics.contact",
+             "a soft body's tissue is the contact law: use contact = \"penalty\"")  # fmt: skip
     if b.z_range:
         _require(len(b.z_range) == 2 and b.z_range[0] < b.z_range[1], src, "body.z_range",
                  f"must be [z_min, z_max] with z_min < z_max, got {b.z_range}")  # fmt: skip
