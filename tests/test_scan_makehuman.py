@@ -257,3 +257,19 @@ def test_gilet_on_the_scan_body(scan):
     # (measured 17 mm with -2 % at the bust), never through an arm (35 mm before the arm-root
     # armholes)
     assert dist.min() > -0.02
+
+
+@pytest.mark.slow
+def test_scan_gilet_scene_end_to_end(tmp_path):
+    """demos/scan_gilet.toml dresses on the MakeHuman body (about 5 min on one core): the run
+    completes with the spring released, and the gilet presses on the torso (and the arm roots
+    its armholes hug), never on the head or the legs."""
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    scene = config.load(Path(__file__).resolve().parents[1] / "demos" / "scan_gilet.toml")
+    result = run(scene, tmp_path, quiet=True)
+    assert result.completed and result.report.final_regularisation == 0.0
+    touched = {r["region"] for r in result.regions if r.get("mean_kPa", 0) > 0}
+    assert touched and touched <= set(TORSO_REGIONS) | {"shoulders", "neck", "arms"}
+    assert {"bust", "shoulders"} <= touched
