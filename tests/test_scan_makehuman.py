@@ -187,42 +187,52 @@ def test_t_pose_keeps_torso_girths_and_finds_the_arms(scan, ref):
     assert t_pose.part[hand] == PARTS["arm_left"]
 
 
-def test_formats_units_and_axes(tmp_path):
+@pytest.fixture(scope="module")
+def raw_and_clean():
+    v, t = read_polygons(MESH)
+    _, ref_t, ref_rep = clean_surface(v, t)
+    return v, t, len(ref_t), ref_rep["height"]
+
+
+# file, units factor from dm, the case's up axis (the model is Y up)
+FORMATS = {
+    "scan.stl": ("binary STL", 100.0, "y"),  # mm
+    "scan_ascii.stl": ("ascii STL", 10.0, "y"),  # cm
+    "scan.ply": ("binary PLY", 0.1, "z"),  # m, Z up
+    "scan_ascii.ply": ("ascii PLY", 1.0 / 0.254, "-x"),  # inches, lying on its side
+    "scan.off": ("OFF", 1.0, "-y"),  # dm, upside down
+    "scan.glb": ("GLB", 0.1, "y"),  # m
+}
+TO_UP = {
+    "y": np.eye(3),
+    "z": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),
+    "-y": np.diag([1.0, -1, -1]),
+    "-x": np.array([[0, -1.0, 0], [1, 0, 0], [0, 0, 1]]),
+}
+
+
+@pytest.mark.parametrize("name", list(FORMATS))
+def test_formats_units_and_axes(name, raw_and_clean, tmp_path):
     """The body converted with trimesh's exporters (other formats, units and up axes) imports
     to the same surface."""
     import trimesh
 
-    v, t = read_polygons(MESH)
-    _, ref_t, ref_rep = clean_surface(v, t)
-    cases = {  # file, units factor from dm, rotation of a Y-up model to the case's up axis
-        "scan.stl": ("binary STL", 100.0, "y"),  # mm
-        "scan_ascii.stl": ("ascii STL", 10.0, "y"),  # cm
-        "scan.ply": ("binary PLY", 0.1, "z"),  # m, Z up
-        "scan_ascii.ply": ("ascii PLY", 1.0 / 0.254, "-x"),  # inches, lying on its side
-        "scan.off": ("OFF", 1.0, "-y"),  # dm, upside down
-        "scan.glb": ("GLB", 0.1, "y"),  # m
-    }
-    to_up = {
-        "y": np.eye(3),
-        "z": np.array([[1.0, 0, 0], [0, 0, -1], [0, 1, 0]]),
-        "-y": np.diag([1.0, -1, -1]),
-        "-x": np.array([[0, -1.0, 0], [1, 0, 0], [0, 0, 1]]),
-    }
-    for name, (kind, k, up) in cases.items():
-        m = trimesh.Trimesh(v @ to_up[up].T * k, t, process=False)
-        path = tmp_path / name
-        if kind == "ascii STL":
-            path.write_text(trimesh.exchange.stl.export_stl_ascii(m))
-        elif kind == "ascii PLY":
-            path.write_bytes(trimesh.exchange.ply.export_ply(m, encoding="ascii"))
-        else:
-            m.export(path)
-        vv, tt = read_polygons(path)
-        _, ct, rep = clean_surface(vv, tt)
-        assert rep["up"] == up, name
-        assert rep["height"] == pytest.approx(ref_rep["height"], rel=1e-5), name
-        assert len(ct) == len(ref_t), name
-        assert rep["units"] == {100.0: "mm", 10.0: "cm", 0.1: "m", 1.0: "dm"}.get(k, "in"), name
+    v, t, n_tri, height = raw_and_clean
+    kind, k, up = FORMATS[name]
+    m = trimesh.Trimesh(v @ TO_UP[up].T * k, t, process=False)
+    path = tmp_path / name
+    if kind == "ascii STL":
+        path.write_text(trimesh.exchange.stl.export_stl_ascii(m))
+    elif kind == "ascii PLY":
+        path.write_bytes(trimesh.exchange.ply.export_ply(m, encoding="ascii"))
+    else:
+        m.export(path)
+    vv, tt = read_polygons(path)
+    _, ct, rep = clean_surface(vv, tt)
+    assert rep["up"] == up
+    assert rep["height"] == pytest.approx(height, rel=1e-5)
+    assert len(ct) == n_tri
+    assert rep["units"] == {100.0: "mm", 10.0: "cm", 0.1: "m", 1.0: "dm"}.get(k, "in")
 
 
 def test_units_and_scale_given(tmp_path):
