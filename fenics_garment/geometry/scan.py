@@ -1,14 +1,16 @@
 """Body-scan import: read (trimesh), clean, scale, stand up, segment, find landmarks, tag regions.
 
-Real scans come as quads and n-gons, in several pieces (floor, props, floating specks), with
-small holes (armpits, crotch, soles), inconsistent face orientation, duplicated vertices, in
-millimetres or centimetres and with any up axis. :func:`load_scan` repairs what can be repaired
-without guessing (weld, drop degenerate faces, keep the largest piece, fill small holes, orient
-outward) and raises :class:`~.errors.ScanError` with the reason otherwise.
+Real scans come as quads and n-gons, in several pieces (floor, props, floating specks, eyes,
+teeth, clothing helpers), with small holes (armpits, crotch, soles), inconsistent face
+orientation, duplicated vertices, in any unit and with any up axis. :func:`load_scan` repairs
+what can be repaired without guessing (weld, drop degenerate faces, keep the body piece, fill
+small holes, orient outward), detects units and up axis (:mod:`.orientation`), separates torso,
+arms, legs and head and finds the landmarks (:mod:`.anatomy`), and raises
+:class:`~.errors.ScanError` with the reason otherwise.
 
-Assumed pose: standing, arms away from the torso (or no arms), a full body from the feet up
-(landmark search uses fractions of the stature). After turning upright the scan's own front
-stays where it was; for a Y-up scan facing +z (the usual OBJ convention) the front ends at −y.
+Assumed pose: standing, arms clear of the torso (A- or T-pose) or no arms, a full body from the
+feet up. After turning upright the scan's own front stays where it was; for a Y-up scan facing
++z (the usual OBJ/glTF convention) the front ends at −y.
 """
 
 from __future__ import annotations
