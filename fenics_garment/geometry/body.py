@@ -36,6 +36,9 @@ class BodySurface:
             curve the mannequin was lofted through, or the tape (convex-hull) section of a scan.
             Leg levels are keyed ``thigh_left``/``thigh_right`` etc. Garments are built from these.
         measurements: the requested measurements (mannequin only).
+        part: (m,) body part per triangle (:data:`~.anatomy.PARTS`) where segmented (scans).
+        points: named 3-D landmark points (``armpit_left``, ``shoulder_right`` …) of a scan.
+        arm_cut: x of the vertical arm-root plane per side (``left`` > 0, ``right`` < 0).
     """
 
     vertices: Array
@@ -46,6 +49,9 @@ class BodySurface:
     sections: dict[str, Array] = field(default_factory=dict)
     measurements: Measurements | None = None
     up: tuple[float, float, float] = (0.0, 0.0, 1.0)
+    part: npt.NDArray[np.int32] | None = None
+    points: dict[str, Array] = field(default_factory=dict)
+    arm_cut: dict[str, float] = field(default_factory=dict)
 
     def triangles_of(self, name: str) -> npt.NDArray[np.int64]:
         """Indices of the triangles of a named region; :class:`MissingRegion` if absent."""
@@ -136,12 +142,16 @@ def finish_body(
     landmarks: dict[str, float],
     sections: dict[str, Array],
     measurements: Measurements | None = None,
+    part: npt.NDArray[np.int32] | None = None,
 ) -> BodySurface:
-    """Orient outward, tag regions, and pack a :class:`BodySurface`."""
+    """Orient outward, tag regions (on the torso only where ``part`` is given), pack a
+    :class:`BodySurface`."""
     from .regions import REGIONS, tag_regions
 
     tri = srf.orient_outward(vertices, triangles)
     centre_y = {k: float(sec.centroid(p)[1]) for k, p in sections.items() if k in landmarks}
-    region = tag_regions(vertices, tri, landmarks, centre_y)
+    region = tag_regions(vertices, tri, landmarks, centre_y, part)
     present = {n: v for n, v in REGIONS.items() if np.any(region == v)}
-    return BodySurface(vertices, tri, region, present, dict(landmarks), sections, measurements)
+    return BodySurface(
+        vertices, tri, region, present, dict(landmarks), sections, measurements, part=part
+    )

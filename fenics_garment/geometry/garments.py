@@ -37,7 +37,8 @@ import numpy.typing as npt
 from . import sections as sec
 from .body import BodySurface
 from .errors import GeometryError, MissingRegion
-from .gmsh_utils import gmsh_session, to_dolfinx
+from .garment_checks import check_garment
+from .gmsh_utils import GMSH_TIME_LIMIT, gmsh_session, time_limit, to_dolfinx
 from .mannequin import add_loft
 
 Array = npt.NDArray[np.float64]
@@ -457,14 +458,34 @@ def _finish(
 
     t0 = time.perf_counter()
     with gmsh_session(comm, 0, name=kind) as g:
-        data = build(g) if g is not None else None
+        data, err = None, None
+        if g is not None:
+            try:
+                with time_limit(GMSH_TIME_LIMIT, f"the {kind}"):
+                    data = build(g)
+                check_garment(kind, data["points"], data["cells"], [lv.z for lv in table],
+                              max(lv.garment_girth for lv in table))  # fmt: skip
+            except GeometryError as e:
+                err = str(e)
+            except Exception as e:  # gmsh raises a bare Exception with its last error
+                err = f"gmsh could not build the {kind}: {_first_line(e)}"
         if comm is not None and comm.size > 1:
-            data = comm.bcast(data, root=0)
+            data, err = comm.bcast((data, err), root=0)
+        if err:
+            raise GeometryError(err)
         meshdata = None
         if comm is not None:
-            meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
+            try:
+                meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
+            except RuntimeError as e:  # e.g. "Duplicate mesh entity detected"
+                raise GeometryError(f"DOLFINx refused the {kind} mesh: {_first_line(e)}") from e
     data["info"] = {"seconds": time.perf_counter() - t0, "cells": len(data["cells"])}
     return GarmentSurface(levels=table, meshdata=meshdata, **data)
+
+
+def _first_line(e: BaseException) -> str:
+    lines = str(e).strip().splitlines()
+    return lines[0] if lines else type(e).__name__
 
 
 class _TorsoClassifier:
@@ -547,12 +568,26 @@ def _top_cuts(
     x_tip = sh[:, 0].max()
     x_neck = nb[:, 0].max()
     z_bottom = z_uc - arm_drop
+    if "armpit" in body.landmarks:  # a segmented body: the armhole reaches below the real armpit
+        z_bottom = min(z_bottom, body.landmarks["armpit"] - arm_drop)
     zc = z_sh + 0.03
     cuts = []
     x_in = x_neck + strap
     ax = x_tip + 0.03 - x_in
     for s in (1.0, -1.0):
-        cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), 0.0, zc), (ax, 0.085, zc - z_bottom)))
+        root = body.points.get("arm_root_left" if s > 0 else "arm_root_right")
+        if root is None or not np.all(np.isfinite(root)):
+            cuts.append(
+                _Cut("ellipsoid", (s * (x_tip + 0.03), 0.0, zc), (ax, 0.085, zc - z_bottom))
+            )
+            continue
+        # a segmented body (scan): the opening in the garment's plane (0.03 m inside the
+        # ellipsoid's centre, where its cross-section is shrunk by k) covers the arm root's
+        # depth with 2 cm to spare and reaches down to z_bottom
+        k = np.sqrt(max(1.0 - (0.03 / ax) ** 2, 0.1))
+        y_c, half = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + 0.02
+        cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), y_c, zc),
+                         (ax, half / k, (zc - z_bottom) / k)))  # fmt: skip
     y_front = nb[:, 1].min()
     y_back = nb[:, 1].max()
     if scoop_front > 0:
@@ -589,7 +624,8 @@ def make_gilet(
         min_clearance: raise the normal offset to at least this (m), see module doc.
         hem: landmark level of the hem (``hip``, ``abdomen`` or ``waist``).
         strap: width (m) of fabric left between the neck and the armhole over the shoulder.
-        armhole_drop: how far (m) the armhole reaches below the upper-chest level.
+        armhole_drop: how far (m) the armhole reaches below the upper-chest level (or below
+            the armpit, if lower, on a body whose arms were found: a scan).
         neck_scoop: depth (m) of the front neckline below the neck base.
         front_opening: width (m) of a centre-front opening (None: closed front).
         quads: quadrilateral cells (gmsh recombination) instead of triangles.

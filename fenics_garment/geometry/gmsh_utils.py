@@ -81,3 +81,41 @@ def add_discrete_surface(
         next_el += sel.size
         g.model.mesh.addElementsByType(s, 2, el, (triangles[sel] + 1).ravel().astype(np.uint64))
         g.model.addPhysicalGroup(2, [s], int(value), name=name)
+
+
+#: seconds gmsh may spend building and meshing one garment or body before the run stops
+GMSH_TIME_LIMIT = 600.0
+
+
+@contextmanager
+def time_limit(seconds: float | None, what: str) -> Iterator[None]:
+    """Stop the process with a one-line error and exit code 2 if the block takes too long.
+
+    gmsh's meshers run in C++ and cannot be interrupted from Python; the gmsh API is called
+    through ctypes, which releases the GIL, so a watchdog thread can still act: it writes
+    ``error: gmsh did not finish <what> within <seconds> s …`` to stderr and ends the process
+    (``os._exit(2)``; under MPI, ``mpiexec`` then stops the other ranks). ``None``: no limit.
+    """
+    import os
+    import sys
+    import threading
+
+    if not seconds:
+        yield
+        return
+
+    def expire() -> None:
+        sys.stderr.write(
+            f"error: gmsh did not finish {what} within {seconds:g} s (a hung mesher); "
+            "check the body's landmarks or use a coarser mesh_size\n"
+        )
+        sys.stderr.flush()
+        os._exit(2)
+
+    timer = threading.Timer(seconds, expire)
+    timer.daemon = True
+    timer.start()
+    try:
+        yield
+    finally:
+        timer.cancel()

@@ -27,6 +27,8 @@ REGIONS: dict[str, int] = {
     "knees": 13,
     "calves": 14,
     "ankles": 15,
+    "arms": 16,
+    "head": 17,
 }
 
 
@@ -35,13 +37,16 @@ def tag_regions(
     triangles: npt.NDArray[np.int64],
     landmarks: dict[str, float],
     centre_y: dict[str, float] | None = None,
+    part: npt.NDArray[np.int32] | None = None,
 ) -> npt.NDArray[np.int32]:
     """Region number (see :data:`REGIONS`) of each triangle.
 
     ``landmarks`` maps level names (``neck_base``, ``shoulder``, ``upper_chest``, ``bust``,
     ``underbust``, ``waist``, ``abdomen``, ``hip``, ``crotch``, ``thigh``, ``knee``, ``calf``,
     ``ankle``) to heights in metres; ``centre_y`` gives the y of the torso centre at the levels
-    (default 0) to split front from back.
+    (default 0) to split front from back. ``part`` (:data:`~.anatomy.PARTS` per triangle, from
+    the segmentation of a scan) puts arms and head in their own regions and keeps the torso
+    bands on the torso and the leg bands on the legs.
     """
     L = landmarks
     c = vertices[triangles].mean(axis=1)
@@ -86,4 +91,9 @@ def tag_regions(
         r[z < mid("calf", "ankle")] = R["ankles"]
     else:
         r[z < L["crotch"]] = R["thighs"]
+    if part is not None:
+        from .anatomy import PARTS
+
+        r[part == PARTS["head"]] = R["head"]
+        r[(part == PARTS["arm_left"]) | (part == PARTS["arm_right"])] = R["arms"]
     return r

@@ -218,14 +218,17 @@ def signed_distance_2d(points: Array, polygon: Array) -> Array:
 
 
 def contains(polygon: Array, points: Array) -> npt.NDArray[np.bool_]:
-    """Even-odd point-in-polygon test (numpy only)."""
+    """Even-odd point-in-polygon test (numpy only, vectorised over edges and points)."""
     p = np.atleast_2d(points)
-    a = polygon
-    b = np.roll(polygon, -1, axis=0)
+    a = np.asarray(polygon)
+    b = np.roll(a, -1, axis=0)
     inside = np.zeros(len(p), dtype=bool)
-    for (x0, y0), (x1, y1) in zip(a, b, strict=True):
-        crosses = (y0 > p[:, 1]) != (y1 > p[:, 1])
+    step = max(1, 2_000_000 // max(len(a), 1))
+    for s in range(0, len(p), step):
+        q = p[s : s + step, None, :]
+        y0, y1, x0, x1 = a[None, :, 1], b[None, :, 1], a[None, :, 0], b[None, :, 0]
+        crosses = (y0 > q[..., 1]) != (y1 > q[..., 1])
         with np.errstate(divide="ignore", invalid="ignore"):
-            xs = x0 + (p[:, 1] - y0) * (x1 - x0) / (y1 - y0)
-        inside ^= crosses & (p[:, 0] < xs)
+            xs = x0 + (q[..., 1] - y0) * (x1 - x0) / (y1 - y0)
+        inside[s : s + step] = (np.count_nonzero(crosses & (q[..., 0] < xs), axis=1) % 2) == 1
     return inside

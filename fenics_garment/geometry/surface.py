@@ -7,12 +7,10 @@ meshes that come out of gmsh.
 
 from __future__ import annotations
 
-from collections import deque
-
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import ScanError
 
@@ -35,12 +33,19 @@ def merge_duplicate_vertices(
 ) -> tuple[Array, IArray]:
     """Weld vertices closer than ``tol`` (rounded to a grid of ``tol``) and drop unused ones."""
     key = np.round(vertices / tol).astype(np.int64)
-    _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
+    key -= key.min(axis=0)
+    span = key.max(axis=0) + 1
+    if float(np.prod(span.astype(np.float64))) < 2.0**62:  # one int64 key per vertex
+        flat = (key[:, 0] * span[1] + key[:, 1]) * span[2] + key[:, 2]
+        _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+    else:
+        _, first, inverse = np.unique(key, axis=0, return_index=True, return_inverse=True)
     tri = inverse.ravel()[triangles]
-    return _compact(vertices[first], tri)
+    return compact(vertices[first], tri)
 
 
-def _compact(vertices: Array, triangles: IArray) -> tuple[Array, IArray]:
+def compact(vertices: Array, triangles: IArray) -> tuple[Array, IArray]:
+    """Drop unused vertices and renumber the triangles."""
     used, inv = np.unique(triangles.ravel(), return_inverse=True)
     return vertices[used], inv.reshape(triangles.shape)
 
@@ -52,7 +57,9 @@ def drop_degenerate(triangles: IArray) -> IArray:
         & (triangles[:, 1] != triangles[:, 2])
         & (triangles[:, 0] != triangles[:, 2])
     ]
-    _, keep = np.unique(np.sort(t, axis=1), axis=0, return_index=True)
+    st = np.sort(t, axis=1).astype(np.int64)
+    n = int(st.max()) + 1 if len(st) else 1
+    _, keep = np.unique((st[:, 0] * n + st[:, 1]) * n + st[:, 2], return_index=True)
     return t[np.sort(keep)]
 
 
@@ -60,8 +67,17 @@ def edges(triangles: IArray) -> tuple[IArray, IArray]:
     """Unique undirected edges (e, 2) and, per triangle corner edge, the edge index (m, 3)."""
     directed = np.concatenate([triangles[:, [0, 1]], triangles[:, [1, 2]], triangles[:, [2, 0]]])
     und = np.sort(directed, axis=1)
-    uniq, inv = np.unique(und, axis=0, return_inverse=True)
+    uniq, inv = _unique_rows(und)
     return uniq, inv.reshape(3, -1).T
+
+
+def _unique_rows(pairs: IArray) -> tuple[IArray, IArray]:
+    """``np.unique(pairs, axis=0, return_inverse=True)`` for non-negative int pairs, through
+    one int64 key per row (a 1-D sort: 10–20× faster than the row-wise one)."""
+    n = int(pairs.max()) + 1 if len(pairs) else 1
+    key = pairs[:, 0].astype(np.int64) * n + pairs[:, 1]
+    uk, inv = np.unique(key, return_inverse=True)
+    return np.column_stack([uk // n, uk % n]), inv.ravel()
 
 
 def edge_valence(triangles: IArray) -> npt.NDArray[np.int64]:
@@ -101,43 +117,51 @@ def signed_volume(vertices: Array, triangles: IArray) -> float:
 def orient_consistently(triangles: IArray) -> IArray:
     """Flip triangles so that neighbours traverse their shared edge in opposite directions.
 
-    Breadth-first over each connected component; raises :class:`ScanError` on a non-orientable
-    (Möbius-like) surface.
+    Breadth-first over the triangles sharing manifold edges: a triangle's flip is its parent's,
+    toggled where the two traverse the shared edge the same way. Raises :class:`ScanError` on a
+    non-orientable (Möbius-like) surface.
     """
-    tri = triangles.copy()
-    _, tri_edges = edges(tri)
-    e2t: dict[int, list[int]] = {}
-    for t, es in enumerate(tri_edges):
-        for e in es:
-            e2t.setdefault(int(e), []).append(t)
-    state = np.zeros(len(tri), dtype=np.int8)  # 0 unseen, 1 fixed
-
-    def directed(t: int) -> set[tuple[int, int]]:
-        a, b, c = tri[t]
-        return {(a, b), (b, c), (c, a)}
-
-    for seed in range(len(tri)):
-        if state[seed]:
+    tri = np.asarray(triangles, dtype=np.int64)
+    m = len(tri)
+    if m == 0:
+        return tri.copy()
+    _, te = edges(tri)
+    corner = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    e = np.concatenate([te[:, 0], te[:, 1], te[:, 2]])
+    owner = np.tile(np.arange(m), 3)
+    forward = corner[:, 0] < corner[:, 1]  # the corner runs along the sorted edge direction
+    order = np.argsort(e, kind="stable")
+    e_s, own_s, fw_s = e[order], owner[order], forward[order]
+    cnt = np.bincount(e_s)
+    start = np.concatenate([[0], np.cumsum(cnt)[:-1]])
+    two = np.flatnonzero(cnt == 2)
+    a, b = own_s[start[two]], own_s[start[two] + 1]
+    same = fw_s[start[two]] == fw_s[start[two] + 1]  # same direction: one of them must flip
+    g = coo_matrix((np.ones(len(a)), (a, b)), shape=(m, m)).tocsr()
+    g = g + g.T
+    lo, hi = np.minimum(a, b), np.maximum(a, b)
+    pair_key = lo * m + hi
+    sort = np.argsort(pair_key)
+    flip = np.zeros(m, dtype=bool)
+    seen = np.zeros(m, dtype=bool)
+    for seed in range(m):
+        if seen[seed]:
             continue
-        state[seed] = 1
-        queue = deque([seed])
-        while queue:
-            t = queue.popleft()
-            dt = directed(t)
-            for e in tri_edges[t]:
-                for u in e2t[int(e)]:
-                    if u == t:
-                        continue
-                    clash = bool(dt & directed(u))  # same direction on the shared edge
-                    if state[u]:
-                        if clash and len(e2t[int(e)]) == 2:
-                            raise ScanError("surface is not orientable")
-                        continue
-                    if clash:
-                        tri[u] = tri[u][::-1]
-                    state[u] = 1
-                    queue.append(u)
-    return tri
+        nodes, pred = breadth_first_order(g, seed, directed=False, return_predecessors=True)
+        seen[nodes] = True
+        kids = nodes[1:]
+        par = pred[kids]
+        k = np.minimum(kids, par) * m + np.maximum(kids, par)
+        s_kid = same[sort[np.searchsorted(pair_key, k, sorter=sort)]]
+        fl = dict.fromkeys(nodes.tolist(), False)
+        for n, p_, s_ in zip(kids.tolist(), par.tolist(), s_kid.tolist(), strict=True):
+            fl[n] = fl[p_] ^ s_
+        flip[nodes] = [fl[n] for n in nodes.tolist()]
+    if np.any(same != (flip[a] ^ flip[b])):
+        raise ScanError("surface is not orientable")
+    out = tri.copy()
+    out[flip] = out[flip][:, ::-1]
+    return out
 
 
 def orient_outward(vertices: Array, triangles: IArray) -> IArray:

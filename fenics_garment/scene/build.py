@@ -43,7 +43,10 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
             path = Path(b.file)
             if not path.is_absolute() and scene.source:
                 path = Path(scene.source).parent / path
-            body, _ = load_scan(path, units=b.units or None, remesh=b.mesh_size)
+            body, _ = load_scan(path, units=b.units or None, up=b.up or None,
+                                max_hole_edges=b.max_hole_edges, scale=b.scale or None,
+                                remesh=b.mesh_size if b.remesh else None,
+                                landmarks=dict(b.landmarks) or None)  # fmt: skip
         else:
             from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
             from fenics_garment.geometry.measurements import measurements
@@ -164,12 +167,23 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
     surface = SmoothBody if p.body_surface == "smooth" else search.BodySurface
     sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
-    contact = shell_contact.attach(model, sbody, kappa_hat=p.kappa_hat, rule=_rule(model),
+    contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
+                                   kappa_hat=p.kappa_hat, rule=_rule(model),
                                    mu=p.friction if p.friction > 0 else None)  # fmt: skip
     mu = contact.friction.mu if contact.friction else None
     c0 = scene.dressing.regularisation / p.kappa_hat * float(contact.kappa.value)
     reg = add_regularisation(model, c0)
     return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
+
+
+def tissue_stiffness(scene: Scene) -> float | None:
+    """Contact stiffness [Pa/m] of a soft body (``body.tissue = "soft"``): the Winkler layer of
+    :class:`~fenics_garment.contact.terms.SoftTissue` with the seed paper's Table 1 modulus and
+    Poisson ratio over ``body.tissue_depth``; None for a rigid body (the numerical penalty)."""
+    from fenics_garment.contact.terms import SoftTissue
+
+    b = scene.body
+    return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
 
 
 def _rule(model: ShellModel) -> str:

@@ -64,7 +64,17 @@ class BodyConfig:
     z_range: list[float] = field(default_factory=lambda: [0.75, 1.55])  # crop [m]; [] = none
     mesh_size: float = 0.02  # body triangle size [m]
     file: str = ""  # scan file (kind = "scan"), relative to the scene file
-    units: str = ""  # scan units "m" | "cm" | "mm" ("" = detect)
+    units: str = ""  # scan units "mm" | "cm" | "dm" | "m" | "in" ("" = detect from the height)
+    scale: float = 0.0  # scan: metres per file unit, instead of units (0 = use units)
+    up: str = ""  # scan: the file's up axis "x" | "-x" | "y" | "-y" | "z" | "-z" ("" = detect)
+    max_hole_edges: int = 40  # scan: holes up to this many boundary edges are filled
+    remesh: bool = False  # scan: remesh with gmsh at mesh_size (false: keep its triangles)
+    landmarks: dict[str, float] = field(default_factory=dict)  # scan: heights [m] to override
+    # "rigid", or "soft": a Winkler layer of soft tissue of tissue_depth [m] over a rigid core,
+    # with the seed paper's Table 1 body modulus and Poisson ratio (contact.terms.SoftTissue);
+    # the contact stiffness is then the tissue's, not a numerical penalty
+    tissue: str = "rigid"
+    tissue_depth: float = 0.02  # [m] our assumption: the paper gives no depth
     radius: float = 0.1  # cylinder radius [m]
     length: float = 0.2  # cylinder length [m]
 
@@ -163,6 +173,7 @@ EASE_LEVELS = {
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.BodySurface | contact.smooth.SmoothBody
+TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 
 
@@ -284,7 +295,23 @@ def _check(s: Scene) -> None:
             _require(v > 0, src, f"body.measurements.{k}", f"must be positive, got {v}")
     if b.kind == "scan":
         _require(bool(b.file), src, "body.file", "a scan body needs a file")
-        _require(b.units in ("", "m", "cm", "mm"), src, "body.units", "must be m, cm or mm")
+        from fenics_garment.geometry.anatomy import LANDMARKS
+        from fenics_garment.geometry.orientation import ROTATIONS, UNITS
+
+        _require(b.units in ("", *UNITS), src, "body.units", f"must be one of {', '.join(UNITS)}")
+        _require(b.up in ("", *ROTATIONS), src, "body.up", f"must be one of {', '.join(ROTATIONS)}")
+        _require(b.scale >= 0, src, "body.scale", f"must be positive (m per unit), got {b.scale}")
+        _require(not (b.scale and b.units), src, "body.scale", "give units or scale, not both")
+        _require(b.max_hole_edges >= 0, src, "body.max_hole_edges", "must be 0 or more")
+        for k, v in b.landmarks.items():
+            if k not in LANDMARKS:
+                raise _unknown(k, list(LANDMARKS), "body.landmarks", src)
+            _require(v > 0, src, f"body.landmarks.{k}", f"must be a height > 0 [m], got {v}")
+    _one_of(b.tissue, TISSUES, src, "body.tissue")
+    _require(b.tissue_depth > 0, src, "body.tissue_depth",
+             f"must be positive, got {b.tissue_depth}")  # fmt: skip
+    _require(b.tissue != "soft" or s.physics.contact == "penalty", src, "physics.contact",
+             "a soft body's tissue is the contact law: use contact = \"penalty\"")  # fmt: skip
     if b.z_range:
         _require(len(b.z_range) == 2 and b.z_range[0] < b.z_range[1], src, "body.z_range",
                  f"must be [z_min, z_max] with z_min < z_max, got {b.z_range}")  # fmt: skip

@@ -1,0 +1,416 @@
+"""Anatomy from geometry: torso, arms, legs and head of an upright body, and its landmarks.
+
+The body is read from horizontal sections (feet at z = 0, +z up, facing −y, its left at +x,
+centred near x = 0), not from fixed fractions of the stature:
+
+* **Torso outline** at a height: the largest outer outline of the section whose x-range
+  contains the body's mid-plane x = 0 (legs and arms never straddle it; hands are smaller).
+* **Crotch**: the lowest height from which the torso outline exists (the legs have merged).
+* **Armpits**: going up from the narrowest section below the widest one (the waist below the
+  arms), the first height
+  where the torso outline's lateral extent grows by more than ``ARM_JUMP`` between
+  neighbouring sections: there the arm joins the torso. The same rule holds in an A-pose (the
+  chest wall jumps to the arm's outer side) and a T-pose (the chest jumps to the arm span);
+  coming down from the arms instead is fooled by a T-pose's nearly horizontal arm underside.
+  The armpit point is the torso outline's lateral extreme just below; the vertical plane
+  through it is the arm root (**arm cut**).
+* **Arms**: the triangles beyond the arm cut that are connected (beyond it) to the most
+  lateral point on that side. **Legs**: the rest below the crotch, split at x = 0.
+* **Shoulder points**: the highest point of the surface on the vertical line through each
+  armpit point (the top of the armhole, close to the acromion).
+* **Neck**: the smallest torso girth between the shoulders and the face; **head**: from where,
+  going up, the girth first exceeds ``HEAD_FLARE`` × the neck girth (the jaw).
+* **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
+  the upper arms never count; below the armpits the torso outline is on its own.
+* Waist, hip, bust, under-bust: the narrowest / widest torso girths in their ranges (see
+  :func:`torso_levels`); knee, calf, ankle: the narrowest / widest leg girths.
+
+Girths are tape girths (convex hull perimeter, ISO 8559-1). Overrides (heights in metres)
+replace any detected level.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from . import sections as sec
+from .errors import ScanError
+from .measurements import LEG_LEVELS, TORSO_LEVELS
+
+Array = npt.NDArray[np.float64]
+IArray = npt.NDArray[np.int64]
+
+#: lateral drop [m] between neighbouring sections that marks an arm leaving the torso
+ARM_JUMP = 0.02
+#: girth ratio over the neck girth where the head (jaw) begins
+HEAD_FLARE = 1.25
+#: landmark levels a scene may override (heights in metres above the floor)
+LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
+#: body parts, numbered per triangle in :attr:`Anatomy.part`
+PARTS = {"torso": 0, "head": 1, "arm_left": 2, "arm_right": 3, "leg_left": 4, "leg_right": 5}
+
+
+@dataclass(frozen=True)
+class Outline:
+    """One outer outline of a horizontal section."""
+
+    points: Array
+    area: float
+    xmin: float
+    xmax: float
+
+
+@dataclass
+class Anatomy:
+    """Landmark heights, points, the arm cuts and a body part per triangle."""
+
+    landmarks: dict[str, float]
+    points: dict[str, Array]
+    arm_cut: dict[str, float]  # "left" -> x of the left arm root plane (> 0), "right" (< 0)
+    part: npt.NDArray[np.int32]
+    girths: dict[str, float] = field(default_factory=dict)
+    sections: dict[str, Array] = field(default_factory=dict)  # torso-only tape sections
+
+    def torso_section(self, vertices: Array, triangles: IArray, z: float) -> Array:
+        """The torso's tape (convex hull) section at ``z``, clipped to the arm cuts."""
+        return torso_section(vertices, triangles, z, self.arm_cut, self.landmarks.get("armpit"))
+
+
+def outlines(vertices: Array, triangles: IArray, z: float) -> list[Outline]:
+    """Outer outlines of the section at ``z`` (nested ones, e.g. around a hollow, dropped)."""
+    loops = [p for p in sec.slice_loops(vertices, triangles, z) if len(p) > 2]
+    res = [Outline(p, abs(sec.polygon_area(p)), float(p[:, 0].min()), float(p[:, 0].max()))
+           for p in loops]  # fmt: skip
+    res.sort(key=lambda o: -o.area)
+    outer: list[Outline] = []
+    for o in res:
+        if not any(sec.contains(b.points, o.points[:1])[0] for b in outer):
+            outer.append(o)
+    return outer
+
+
+def torso_outline(vertices: Array, triangles: IArray, z: float) -> Outline | None:
+    """The largest outer outline at ``z`` whose x-range contains x = 0, or None."""
+    for o in outlines(vertices, triangles, z):
+        if o.xmin < 0.0 < o.xmax:
+            return o
+    return None
+
+
+def clip_x(poly: Array, lo: float, hi: float) -> Array:
+    """A closed polygon clipped to the strip lo ≤ x ≤ hi (Sutherland–Hodgman, two edges)."""
+
+    def half(p: Array, x0: float, keep_below: bool) -> Array:
+        if len(p) == 0:
+            return p
+        s = (x0 - p[:, 0]) if keep_below else (p[:, 0] - x0)
+        out = []
+        for i in range(len(p)):
+            j = (i + 1) % len(p)
+            if s[i] >= 0:
+                out.append(p[i])
+            if (s[i] >= 0) != (s[j] >= 0):
+                t = s[i] / (s[i] - s[j])
+                out.append(p[i] + t * (p[j] - p[i]))
+        return np.array(out).reshape(-1, 2)
+
+    return half(half(poly, hi, True), lo, False)
+
+
+def torso_section(
+    vertices: Array, triangles: IArray, z: float, cut: dict[str, float], armpit: float | None
+) -> Array:
+    """Convex hull of the torso outline at ``z``; above the ``armpit`` height clipped to the arm
+    cut planes (below it the arms are separate outlines, and hips may be wider than the cut)."""
+    o = torso_outline(vertices, triangles, z)
+    if o is None:
+        raise ScanError(f"no torso section at z = {z:.3f} m")
+    pts = o.points
+    if armpit is not None and z >= armpit:
+        pts = clip_x(pts, cut.get("right", -np.inf), cut.get("left", np.inf))
+    return sec.convex_hull(pts)
+
+
+def _refine(f, a: float, b: float, steps: int = 7) -> float:
+    """Bisection on a boolean ``f`` with f(a) != f(b); returns the end on f(a)'s side."""
+    fa = f(a)
+    for _ in range(steps):
+        m = 0.5 * (a + b)
+        if f(m) == fa:
+            a = m
+        else:
+            b = m
+    return a
+
+
+def analyse(
+    vertices: Array, triangles: IArray, overrides: dict[str, float] | None = None
+) -> Anatomy:
+    """Segment an upright full body and locate its landmarks (module docstring)."""
+    v, t = vertices, triangles
+    H = float(v[:, 2].max())
+    zs = np.linspace(0.25 * H, 0.995 * H, 250)
+    torso = [torso_outline(v, t, z) for z in zs]
+    have = np.array([o is not None for o in torso])
+    if not have.any():
+        raise ScanError("no section straddles the body's mid-plane", "is it a standing body?")
+    # crotch: lowest section from which the torso outline exists for the next 5 sections
+    run = np.convolve(have.astype(int), np.ones(5, int), "valid") == 5
+    if not run.any():
+        raise ScanError("no continuous torso found", "is it a standing body?")
+    k0 = int(np.argmax(run))
+    crotch = zs[k0] if k0 == 0 else _refine(
+        lambda z: torso_outline(v, t, z) is not None, zs[k0], zs[k0 - 1]
+    )  # fmt: skip
+    upper = [k for k in range(k0, len(zs)) if have[k] and zs[k] > crotch + 0.35 * (H - crotch)]
+    if not upper:
+        raise ScanError("no upper body found above the crotch", "is it a standing body?")
+    armpit, cut, pts = {}, {}, {}
+    for side, sgn in (("left", 1.0), ("right", -1.0)):
+        found = _arm_root(v, t, zs, torso, upper, sgn)
+        if found is not None:
+            z_ap, p = found
+            top = _surface_top(v, t, p[0], p[1])
+            if top is None or top <= z_ap:
+                raise ScanError(f"no shoulder above the {side} armpit")
+            armpit[side], cut[side] = z_ap, float(p[0])
+            pts[f"armpit_{side}"] = np.array([p[0], p[1], z_ap])
+            pts[f"shoulder_{side}"] = np.array([p[0], p[1], top])
+            pts[f"arm_root_{side}"] = _arm_root_box(v, t, float(p[0]), z_ap, top)
+    if len(armpit) == 1:
+        missing = ({"left", "right"} - set(armpit)).pop()
+        raise ScanError(
+            f"the {missing} arm does not leave the torso",
+            "the arms must hang clear of the torso (A- or T-pose); or set the landmarks",
+        )
+
+    z_ap = min(armpit.values()) if armpit else None
+
+    def girth(z: float) -> float:
+        return sec.tape_girth(torso_section(v, t, z, cut, z_ap))
+
+    if armpit:
+        z_armpit = min(armpit.values())
+        z_shoulder = 0.5 * (pts["shoulder_left"][2] + pts["shoulder_right"][2])
+    else:  # no arms: the shoulder is the widest upper-body section, no armpit
+        width = {k: torso[k].xmax - torso[k].xmin for k in upper}
+        z_shoulder = float(zs[max(upper, key=width.get)])
+        # only bounds the search for the bust: 91 % of the shoulder height, between the bust
+        # (0.72 / 0.815 = 0.88) and the upper chest (0.755 / 0.815 = 0.93) of the parametric
+        # mannequin's proportions (measurements.py; our assumption, not a survey value)
+        z_armpit = 0.91 * z_shoulder
+    marks: dict[str, float] = {"crotch": crotch, "shoulder": z_shoulder}
+    if armpit:
+        marks["armpit"] = z_armpit
+    neck, head = _neck_and_head(v, t, girth, z_shoulder + 0.01 * H, H - 0.005 * H)
+    marks["neck"] = neck
+    if head is not None:
+        marks["head"] = head
+    marks["neck_base"] = z_shoulder + 0.6 * (neck - z_shoulder)
+    marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H))
+    marks.update(leg_levels(v, t, crotch, H))
+    if overrides:
+        marks.update(overrides)
+    marks = {k: float(z) for k, z in marks.items()}
+    check_order(marks)
+    part = body_parts(v, t, marks, cut)
+    girths = {k: girth(marks[k]) for k in TORSO_LEVELS if k in marks and k != "crotch"}
+    sections = {k: torso_section(v, t, marks[k], cut, z_ap) for k in girths}
+    return Anatomy(marks, pts, cut, part, girths, sections)
+
+
+def _arm_root(
+    v: Array, t: IArray, zs: Array, torso: list, upper: list[int], sgn: float
+) -> tuple[float, Array] | None:
+    """(armpit height, armpit point (x, y)) on one side, or None if no arm leaves the torso."""
+
+    def reach(o: Outline) -> float:
+        return o.xmax if sgn > 0 else -o.xmin
+
+    ext = {k: reach(torso[k]) for k in upper}
+    k_wide = max(upper, key=ext.get)  # arms included
+    below = [k for k in upper if k < k_wide]
+    if not below:
+        return None
+    k = min(below, key=ext.get) + 1  # from the narrowest below it (the waist) upwards
+    while k in ext and k - 1 in ext and ext[k] < ext[k - 1] + ARM_JUMP:
+        k += 1
+    if k not in ext or k - 1 not in ext:
+        return None
+    thr = 0.5 * (ext[k - 1] + ext[k])
+
+    def attached(z: float) -> bool:
+        o = torso_outline(v, t, z)
+        return o is not None and reach(o) > thr
+
+    z_ap = _refine(attached, zs[k - 1], zs[k])
+    o = torso_outline(v, t, z_ap)
+    if o is None:
+        return None
+    return z_ap, o.points[np.argmax(sgn * o.points[:, 0])]
+
+
+def _arm_root_box(v: Array, t: IArray, x: float, z_ap: float, z_top: float) -> Array:
+    """(y_min, y_max, z_min, z_max) of the arm root: the outline of the body's section by the
+    vertical plane through the armpit (x = const) that contains the point half-way up between
+    armpit and shoulder point, above the armpit."""
+    vv = v[:, [1, 2, 0]]  # (y, z, x): slice_loops cuts at constant third coordinate
+    z_mid = 0.5 * (z_ap + z_top)
+    loops = [p for p in sec.slice_loops(vv, t, x) if len(p) > 2]
+    inside = [p for p in loops if p[:, 1].min() <= z_mid <= p[:, 1].max()]
+    if not inside:
+        return np.array([np.nan, np.nan, z_ap, z_top])
+    p = max(inside, key=lambda q: abs(sec.polygon_area(q)))
+    p = p[p[:, 1] >= z_ap - 1e-3]
+    return np.array([p[:, 0].min(), p[:, 0].max(), z_ap, z_top])
+
+
+def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[float, float | None]:
+    """Going up from ``lo``: the neck is the running girth minimum at the height where the girth
+    first exceeds ``HEAD_FLARE`` times it (the jaw: the head starts there); without a head the
+    neck is the smallest girth up to ``hi``."""
+    zn = [z for z in np.linspace(lo, hi, 60) if torso_outline(v, t, z) is not None]
+    if not zn:
+        raise ScanError("no neck found above the shoulders")
+    best_z, best_g = zn[0], np.inf
+    for z in zn:
+        g = girth(z)
+        if g < best_g:
+            best_z, best_g = z, g
+        elif g > HEAD_FLARE * best_g:
+            return float(best_z), float(z)
+    return float(best_z), None
+
+
+def torso_levels(girth, crotch: float, armpit: float, shoulder: float, H: float) -> dict:
+    """Waist = narrowest torso girth in the middle half between crotch and armpit; hip = widest
+    between 3 % of the stature above the crotch (below, the tape spans both thighs) and the
+    waist; bust = widest between waist and armpit; under-bust = narrowest
+    between waist and bust; abdomen half-way hip–waist; upper chest 40 % of the way from the
+    bust to the shoulder (our convention, as in the parametric mannequin's proportions)."""
+    span = armpit - crotch
+    zs = np.linspace(crotch + 0.005 * H, armpit - 0.002 * H, 90)
+    g = np.array([girth(z) for z in zs])
+
+    def arg(fn, lo: float, hi: float) -> float:
+        sel = (zs >= lo) & (zs <= hi)
+        if not sel.any():
+            raise ScanError(f"no torso section between {lo:.3f} and {hi:.3f} m")
+        i = np.flatnonzero(sel)[fn(g[sel])]
+        return float(zs[i])
+
+    waist = arg(np.argmin, crotch + 0.25 * span, crotch + 0.75 * span)
+    hip = arg(np.argmax, crotch + 0.03 * H, waist - 0.02 * H)  # not the span across the thighs
+    bust = arg(np.argmax, waist + 0.04 * H, armpit)
+    under = arg(np.argmin, waist + 0.01 * H, bust - 0.01 * H) if bust - waist > 0.03 * H else (
+        0.5 * (waist + bust))  # fmt: skip
+    return {
+        "hip": hip,
+        "abdomen": 0.5 * (hip + waist),
+        "waist": waist,
+        "underbust": under,
+        "bust": bust,
+        "upper_chest": bust + 0.4 * (shoulder - bust),
+    }
+
+
+def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
+    """Left leg (+x): calf = widest girth at 12–30 % of the stature; knee = the middle of the
+    narrow stretch between calf and crotch (girth within 2 % of its minimum there: a smooth
+    knee has a plateau, not a sharp minimum); ankle = narrowest girth between 3 % of the stature
+    and the calf (ISO 8559-1: the minimum girth above the malleoli); thigh 3.5 % of the stature
+    under the crotch."""
+    zl = np.linspace(0.02 * H, crotch - 0.01 * H, 90)
+    leg = {}
+    for z in zl:
+        side = [o for o in outlines(v, t, z) if o.xmin > -0.02 and o.points[:, 0].mean() > 0]
+        if side:
+            leg[float(z)] = sec.tape_girth(side[0].points)  # the largest: the leg, not a hand
+    zk = sorted(leg)
+
+    def within(lo: float, hi: float) -> list[float]:
+        c = [z for z in zk if lo <= z <= hi]
+        if not c:
+            raise ScanError(f"no leg section between {lo:.3f} and {hi:.3f} m")
+        return c
+
+    calf = max(within(0.12 * H, 0.30 * H), key=leg.get)
+    above = within(calf + 0.02 * H, crotch - 0.05 * H)
+    g_min = min(leg[z] for z in above)
+    narrow = [z for z in above if leg[z] <= 1.02 * g_min]
+    knee = 0.5 * (narrow[0] + narrow[-1])
+    ankle = min(within(0.03 * H, calf - 0.03 * H), key=leg.get)
+    return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
+
+
+def check_order(marks: dict[str, float]) -> None:
+    """Landmark heights must increase from ankle to neck (detected or overridden)."""
+    order = [k for k in (*LEG_LEVELS, *TORSO_LEVELS) if k in marks]
+    z = [marks[k] for k in order]
+    bad = [f"{a} {za:.3f} ≥ {b} {zb:.3f}" for (a, za), (b, zb)
+           in zip(zip(order, z, strict=True), zip(order[1:], z[1:], strict=True), strict=False)
+           if zb <= za]  # fmt: skip
+    if bad:
+        raise ScanError(
+            "landmark heights out of order: " + "; ".join(bad),
+            "set them in [body.landmarks] (metres above the floor)",
+        )
+
+
+def _surface_top(v: Array, t: IArray, x: float, y: float) -> float | None:
+    """Highest z where the vertical line through (x, y) meets the surface."""
+    p = v[t]
+    a, b, c = p[:, 0], p[:, 1], p[:, 2]
+    d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
+    with np.errstate(divide="ignore", invalid="ignore"):
+        l1 = ((b[:, 1] - c[:, 1]) * (x - c[:, 0]) + (c[:, 0] - b[:, 0]) * (y - c[:, 1])) / d
+        l2 = ((c[:, 1] - a[:, 1]) * (x - c[:, 0]) + (a[:, 0] - c[:, 0]) * (y - c[:, 1])) / d
+    l3 = 1.0 - l1 - l2
+    hit = (l1 >= 0) & (l2 >= 0) & (l3 >= 0) & np.isfinite(l1)
+    if not hit.any():
+        return None
+    z = l1 * a[:, 2] + l2 * b[:, 2] + l3 * c[:, 2]
+    return float(z[hit].max())
+
+
+def body_parts(
+    v: Array, t: IArray, marks: dict[str, float], cut: dict[str, float]
+) -> npt.NDArray[np.int32]:
+    """Part number (:data:`PARTS`) per triangle: arms beyond the arm cuts (connected to the most
+    lateral point), legs below the crotch, head above the jaw, torso the rest."""
+    c = v[t].mean(axis=1)
+    part = np.full(len(t), PARTS["torso"], dtype=np.int32)
+    if "head" in marks:
+        part[c[:, 2] >= marks["head"]] = PARTS["head"]
+    low = c[:, 2] < marks["crotch"]
+    part[low & (c[:, 0] >= 0)] = PARTS["leg_left"]
+    part[low & (c[:, 0] < 0)] = PARTS["leg_right"]
+    for side, sgn in (("left", 1.0), ("right", -1.0)):
+        if side not in cut:
+            continue
+        beyond = sgn * c[:, 0] > sgn * cut[side]
+        idx = np.flatnonzero(beyond)
+        if not len(idx):
+            continue
+        lab = _components_of(t, idx)
+        tip = int(np.argmax(sgn * c[idx, 0]))
+        part[idx[lab == lab[tip]]] = PARTS[f"arm_{side}"]
+    return part
+
+
+def _components_of(t: IArray, idx: IArray) -> IArray:
+    """Edge-connected component labels of the triangle subset ``t[idx]``."""
+    sub = t[idx]
+    und = np.sort(np.concatenate([sub[:, [0, 1]], sub[:, [1, 2]], sub[:, [2, 0]]]), axis=1)
+    n = int(und.max()) + 1
+    key = und[:, 0].astype(np.int64) * n + und[:, 1]
+    _, e = np.unique(key, return_inverse=True)
+    m = len(sub)
+    g = coo_matrix((np.ones(3 * m), (np.tile(np.arange(m), 3), e.ravel())))
+    _, lab = connected_components(g @ g.T, directed=False)
+    return lab
