@@ -138,6 +138,12 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
             parts += ["Stress tests (`tests/stress/`, `python -m benchmarks scenes stress`).", ""]
             parts += stress_section(d)
             continue
+        if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
+            from benchmarks.smooth_body import markdown
+
+            parts += ["Faceted vs smooth body surface (`python -m benchmarks.smooth_body`).", ""]
+            parts += [markdown(d), ""]
+            continue
         if meta:
             parts += ["Run: " + ", ".join(f"{k} = {v:.0f}" if isinstance(v, float) else
                                           f"{k} = {v}" for k, v in meta.items()), ""]  # fmt: skip

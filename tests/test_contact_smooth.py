@@ -140,7 +140,7 @@ def test_exact_on_a_plane_and_sign_deep_inside():
 def test_contact_jacobian_is_consistent():
     """The assembled Jacobian of the contact residual on a smooth sphere equals the central
     finite difference of the residual (refreshed at each perturbed state) to 1e-8; without the
-    Hessian term it is off by the normal's turning (2 % here): the linearisation is consistent."""
+    Hessian term it is off by the normal's turning (0.7 % here): the linearisation is consistent."""
     import dolfinx.fem.petsc
 
     from fenics_garment._stack import MPI, dolfinx, ufl
@@ -148,7 +148,7 @@ def test_contact_jacobian_is_consistent():
     from fenics_garment.contact.state import ContactState
     from fenics_garment.shell.geometry import parametric_surface_mesh
 
-    r0 = 0.0985  # a spherical patch 1.5 mm inside the body: every point in contact
+    r0 = 0.0995  # 0.5 mm inside the body: every point in contact, above HESSIAN_DEPTH
     mesh = parametric_surface_mesh(
         MPI.COMM_SELF,
         lambda a, b: r0 * np.vstack([np.cos(a) * np.cos(b), np.sin(a) * np.cos(b), np.sin(b)]),
@@ -161,7 +161,7 @@ def test_contact_jacobian_is_consistent():
     F = terms.contact_residual(state, ufl.TestFunction(V), kappa)
     F_form, J_form = dolfinx.fem.form(F), dolfinx.fem.form(ufl.derivative(F, u))
     rng = np.random.default_rng(0)
-    u0 = rng.normal(scale=2e-4, size=u.x.array.shape)
+    u0 = rng.normal(scale=5e-5, size=u.x.array.shape)  # depths stay 0.5 ± 0.2 mm
     d = rng.normal(scale=1e-4, size=u.x.array.shape)
 
     def residual(q):

@@ -146,7 +146,7 @@ def _weights(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float) -> dict[str,
     sig = np.einsum("kij,kj->ki", s, y)
     sig2 = np.einsum("ki,ki->k", sig, sig)
     q = dict(y=y, rho=rho, om=om, z=z, sig=sig, sig2=sig2, n=n)
-    q["w"] = om**4 * (4.0 * t + 1.0)
+    q["w"] = wendland(t)
     q["a"] = z + 0.5 * np.einsum("ki,ki->k", y, sig) - 0.5 * z * sig2
     q["ssig"] = np.einsum("kij,kj->ki", s, sig)
     q["ga"] = n + sig - 0.5 * sig2[:, None] * n - z[:, None] * q["ssig"]
@@ -252,7 +252,8 @@ class SmoothBody(BodySurface):
             k = min(2 * k, len(self._ids))  # a ball held more than k vertices
         self._k = k
         inside = np.isfinite(dist)
-        return self._ids[idx[inside]], inside.sum(axis=1)
+        ids = np.sort(np.where(inside, self._ids[np.minimum(idx, len(self._ids) - 1)], -1), axis=1)
+        return ids[ids >= 0], inside.sum(axis=1)  # by vertex index: the sums' order is fixed
 
     def _cached_balls(self, x: F64) -> tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]:
         """:meth:`_balls`, reused while the same number of points has moved < BALL_SLACK · r."""
@@ -275,12 +276,13 @@ class SmoothBody(BodySurface):
         m = len(x)
         need = np.ones(m, dtype=bool) if hessian is None else hessian
         j, counts = self._cached_balls(x)
-        rows = _Rows(counts)
+        r = self.support_radius
+        within = np.linalg.norm(x[np.repeat(np.arange(m), counts)] - self.vertices[j], axis=1) < r
+        j = j[within]  # the vertices of nonzero weight, in index order: the same sums whether
+        rows = _Rows(np.bincount(np.repeat(np.arange(m), counts)[within], minlength=m))  # cached
         p, n = self.vertices[j], self.vertex_normals[j]
         y = x[rows.row] - p
-        r = self.support_radius
-        t = np.linalg.norm(y, axis=1) / r
-        w = np.clip(1.0 - t, 0.0, None) ** 4 * (4.0 * t + 1.0)
+        w = wendland(np.linalg.norm(y, axis=1) / r)
         z = np.einsum("ki,ki->k", n, y)
 
         def vertex_terms(k: npt.NDArray[np.bool_]) -> tuple[F64, F64]:
