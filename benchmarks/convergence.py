@@ -112,6 +112,40 @@ def analyse(recs: list[dict]) -> dict:
     return out
 
 
+def markdown(d: dict) -> str:
+    """The report's "convergence" section: per scene, runs and per-region p95 over the meshes."""
+    out = ["Garment-mesh convergence (`python -m benchmarks.convergence`): per scene the runs, "
+           "then per region the p95 [kPa] on each mesh, the observed order (nan: not monotone), "
+           "the finest value's uncertainty (`scene.error_bars.three_level`) and the scene's own "
+           "`--error-bars` estimate at the finest mesh (h against 2h, rate 1).", ""]  # fmt: skip
+    for stem, sc in d.get("scenes", {}).items():
+        ana = sc.get("analysis", {})
+        out += [f"### {stem}", "", sc.get("note", ""), "",
+                "| h [mm] | dofs | solves | Newton its | failed tries | completed | "
+                "penetration / h | wall [s] |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
+        for r in sc.get("runs", []):
+            if r.get("status") != "ok":
+                out.append(f"| {1e3 * r['mesh_size']:.1f} | failed | | | | | | |")
+                continue
+            out.append(f"| {1e3 * r['mesh_size']:.1f} | {r['dofs']} | {r['solves']} | "
+                       f"{r['newton_its']} | {r['failed_attempts']} | {r['completed']} | "
+                       f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |")
+        out += ["", "| region | p95 per mesh | order | finest ± uncertainty | --error-bars |",
+                "|---|---|---|---|---|"]  # fmt: skip
+        for name, row in ana.get("regions", {}).items():
+            c = row.get("p95")
+            if not c:
+                continue
+            vals = " / ".join(f"{v:.3f}" for v in c["values"])
+            out.append(f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
+                       f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} |")
+        target = ana.get("key_p95_within_target")
+        out += ["", f"Key regions' p95 within ±{TARGET:.0%} at each mesh: {target}", ""]
+        if (RESULTS / f"convergence-{stem}.png").exists():
+            out += [f"![convergence-{stem}](convergence-{stem}.png)", ""]
+    return "\n".join(out)
+
+
 def plot(stem: str, ana: dict) -> None:
     import matplotlib
 

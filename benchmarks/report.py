@@ -138,6 +138,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
             parts += ["Stress tests (`tests/stress/`, `python -m benchmarks scenes stress`).", ""]
             parts += stress_section(d)
             continue
+        if name == "convergence":  # garment-mesh sequences (benchmarks/convergence.py)
+            from benchmarks.convergence import markdown as convergence_markdown
+
+            parts += [convergence_markdown(d), ""]
+            continue
         if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
             from benchmarks.smooth_body import markdown
 

@@ -60,7 +60,7 @@ def test_a_non_finite_residual_cuts_the_step_instead_of_raising():
 def soft_penalty(tmp_path_factory):
     """The tube with κ̂ = 1 (penalty): it sinks into the body by more than half its thickness."""
     tmp = tmp_path_factory.mktemp("soft")
-    s = small_tube(physics={"kappa_hat": 1.0})
+    s = small_tube(physics={"kappa_hat": 1.0, "contact": "penalty"})
     code = cli.main(["run", _scene_file(tmp, s), "-q", "-o", str(tmp)])
     return code, json.loads((tmp / s.name / "summary.json").read_text()), s
 

@@ -40,14 +40,16 @@ def richardson_error(fine: float, coarse: float, rate: float = RATE) -> float:
 class Convergence:
     """A statistic on three garment meshes h₁ > h₂ > h₃ of constant ratio r = h₁/h₂ = h₂/h₃.
 
-    ``order``: the observed order p = ln|(Q₁ − Q₂)/(Q₂ − Q₃)| / ln r (nan when the differences
-    change sign: not yet in the asymptotic range); ``extrapolated``: Q₃ + (Q₃ − Q₂)/(r^p − 1);
-    ``error``: the estimated error of each level, the grid convergence index
-    F_s |Q_k − Q_{k−1}|/(r^p − 1) with F_s = 1.25 (Roache, "Perspective: a method for uniform
-    reporting of grid refinement studies", J. Fluids Eng. 116 (1994) 405–413), with p clipped to
-    [:data:`MIN_ORDER`, :data:`MAX_ORDER`] and, outside the asymptotic range, F_s = 3 and
-    p = :data:`MIN_ORDER` (Roache's two-grid safety factor, conservative); the coarsest level's
-    error is its distance to the extrapolated value plus the finest level's error.
+    Monotone convergence (the differences keep their sign and shrink): ``order`` is the observed
+    p = ln|(Q₁ − Q₂)/(Q₂ − Q₃)| / ln r, ``extrapolated`` Q₃ + (Q₃ − Q₂)/(r^p − 1), and the error
+    of level k the grid convergence index 1.25 |Q_k − Q_{k−1}|/(r^p − 1) with p clipped to
+    [:data:`MIN_ORDER`, :data:`MAX_ORDER`] (Roache, "Perspective: a method for uniform reporting
+    of grid refinement studies", J. Fluids Eng. 116 (1994) 405–413); the coarsest level's error
+    is its distance to the extrapolated value plus the finest's. Otherwise (oscillating or
+    growing differences: not in the asymptotic range) ``order`` is nan, the extrapolated value
+    is the finest one and every level's error is 3 × the range of the three values (Eça &
+    Hoekstra, "A procedure for the estimation of the numerical uncertainty of CFD calculations
+    based on grid refinement studies", J. Comput. Phys. 262 (2014) 104–130, oscillatory case).
     """
 
     sizes: tuple[float, ...]
@@ -61,28 +63,25 @@ class Convergence:
 
 
 MIN_ORDER, MAX_ORDER = 0.5, 3.0
+OSCILLATION_FACTOR = 3.0
 
 
 def three_level(sizes: list[float], values: list[float]) -> Convergence:
     """The observed order, Richardson extrapolation and error bars of ``values`` on the meshes
     ``sizes`` (coarse to fine, the last three used; see :class:`Convergence`)."""
     (h1, h2, h3), (q1, q2, q3) = sizes[-3:], values[-3:]
-    r = (h1 / h2 * h2 / h3) ** 0.5
+    r = (h1 / h3) ** 0.5
     d21, d32 = q2 - q1, q3 - q2
-    asymptotic = d21 * d32 > 0 and abs(d32) < abs(d21)
-    if asymptotic:
+    if d21 * d32 > 0 and abs(d32) < abs(d21):
         order = math.log(abs(d21 / d32)) / math.log(r)
-        p, fs = min(max(order, MIN_ORDER), MAX_ORDER), 1.25
-    else:
-        order, p, fs = float("nan"), MIN_ORDER, 3.0
-    if d32 == 0.0:
-        order, p, fs = float("nan"), MAX_ORDER, 1.25
-    extra = q3 + d32 / (r**p - 1.0) if asymptotic else q3
-    e3 = fs * abs(d32) / (r**p - 1.0)
-    e2 = fs * abs(d21) / (r**p - 1.0)
-    e1 = abs(q1 - extra) + e3
-    errs = [abs(q - extra) + e3 for q in values[:-3]]
-    return Convergence(tuple(sizes), tuple(values), order, extra, (*errs, e1, e2, e3))
+        f = r ** min(max(order, MIN_ORDER), MAX_ORDER) - 1.0
+        extra = q3 + d32 / f
+        e3, e2 = 1.25 * abs(d32) / f, 1.25 * abs(d21) / f
+        errs = [abs(q - extra) + e3 for q in values[:-2]] + [e2, e3]
+        return Convergence(tuple(sizes), tuple(values), order, extra, tuple(errs))
+    spread = OSCILLATION_FACTOR * (max(q1, q2, q3) - min(q1, q2, q3))
+    errs = [abs(q - q3) + spread for q in values[:-3]] + [spread] * 3
+    return Convergence(tuple(sizes), tuple(values), float("nan"), q3, tuple(errs))
 
 
 def comfort_range(p_kpa: float, err_kpa: float) -> str:
