@@ -127,9 +127,11 @@ def markdown(d: dict) -> str:
             if r.get("status") != "ok":
                 out.append(f"| {1e3 * r['mesh_size']:.1f} | failed | | | | | | |")
                 continue
-            out.append(f"| {1e3 * r['mesh_size']:.1f} | {r['dofs']} | {r['solves']} | "
-                       f"{r['newton_its']} | {r['failed_attempts']} | {r['completed']} | "
-                       f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |")
+            out.append(
+                f"| {1e3 * r['mesh_size']:.1f} | {r['dofs']} | {r['solves']} | "
+                f"{r['newton_its']} | {r['failed_attempts']} | {r['completed']} | "
+                f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |"
+            )
         out += ["", "| region | p95 per mesh | order | finest ± uncertainty | --error-bars |",
                 "|---|---|---|---|---|"]  # fmt: skip
         for name, row in ana.get("regions", {}).items():
@@ -137,8 +139,10 @@ def markdown(d: dict) -> str:
             if not c:
                 continue
             vals = " / ".join(f"{v:.3f}" for v in c["values"])
-            out.append(f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
-                       f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} |")
+            out.append(
+                f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
+                f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} |"
+            )
         target = ana.get("key_p95_within_target")
         out += ["", f"Key regions' p95 within ±{TARGET:.0%} at each mesh: {target}", ""]
         if (RESULTS / f"convergence-{stem}.png").exists():
@@ -195,8 +199,10 @@ def main(argv: list[str] | None = None) -> int:
             for name, row in ana["regions"].items():
                 if "p95" in row:
                     c = row["p95"]
-                    say(f"    {name:<12} p95 {c['values'][-1]:.3f} ± {c['error'][-1]:.3f} kPa "
-                        f"(order {c['order']:.2f}, extrapolated {c['extrapolated']:.3f})")
+                    say(
+                        f"    {name:<12} p95 {c['values'][-1]:.3f} ± {c['error'][-1]:.3f} kPa "
+                        f"(order {c['order']:.2f}, extrapolated {c['extrapolated']:.3f})"
+                    )
     return 0
 
 

@@ -350,7 +350,7 @@ def _check(s: Scene) -> None:
     _one_of(p.contact, CONTACT_METHODS, src, "physics.contact")
     _one_of(p.body_surface, BODY_SURFACES, src, "physics.body_surface")
     _require(0 < p.tolerance <= 1, src, "physics.tolerance",
-             f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")
+             f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")  # fmt: skip
     _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")
     _require(p.max_updates >= 0, src, "physics.max_updates", "must be >= 0")
     _require(d.steps >= 1, src, "dressing.steps", f"must be >= 1, got {d.steps}")

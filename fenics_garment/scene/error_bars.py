@@ -69,7 +69,7 @@ OSCILLATION_FACTOR = 3.0
 def three_level(sizes: list[float], values: list[float]) -> Convergence:
     """The observed order, Richardson extrapolation and error bars of ``values`` on the meshes
     ``sizes`` (coarse to fine, the last three used; see :class:`Convergence`)."""
-    (h1, h2, h3), (q1, q2, q3) = sizes[-3:], values[-3:]
+    (h1, _, h3), (q1, q2, q3) = sizes[-3:], values[-3:]
     r = (h1 / h3) ** 0.5
     d21, d32 = q2 - q1, q3 - q2
     if d21 * d32 > 0 and abs(d32) < abs(d21):
