@@ -90,12 +90,12 @@ def test_scene_wrong_types_extremes_and_unknown_keys(demo):
             for value in EXTREMES + WRONG_TYPES:
                 data = config.to_dict(config.load(demo))
                 data[section][key] = value
-                outcomes.append(_outcome(lambda d=data: config.from_dict(d, "fuzz.toml")))
+                outcomes.append(_outcome(lambda d=data: config.from_dict(d, str(demo))))
         for _ in range(3):
             data = config.to_dict(config.load(demo))
             word = "".join(rng.choice("abcdefghijklmnopqrstuvwxyz_") for _ in range(8))
             data[section][word] = rng.choice(EXTREMES + WRONG_TYPES)
-            assert _outcome(lambda d=data: config.from_dict(d, "fuzz.toml")) == "error"
+            assert _outcome(lambda d=data: config.from_dict(d, str(demo))) == "error"
     assert outcomes.count("error") > 100 and outcomes.count("ok") > 10
 
 

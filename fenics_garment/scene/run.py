@@ -235,7 +235,7 @@ def _contact_measures(built) -> dict:
     p_max = comm.allreduce(float(p.max()) if len(p) else 0.0, op=MPI.MAX)
     pen = max(uzawa.max_penetration(st), 0.0)
     return {
-        "contact_area_garment_m2": comm.allreduce(float(a[f > 0].sum()), op=MPI.SUM),
+        "contact_area_garment_m2": comm.allreduce(float(a[p > 0].sum()), op=MPI.SUM),
         "contact_force_N": comm.allreduce(float(f.sum()), op=MPI.SUM),
         "max_pressure_kPa": p_max * 1e-3,
         "max_penetration_m": pen,
