@@ -96,7 +96,7 @@ def scene_limits(scene) -> None:
         fail("physics.kappa_hat", f"= {k:g} is more than {MAX_KAPPA_HAT:g}: {why}")
     if k < MIN_KAPPA_HAT:
         why = (f"the garment would sink into the body by about {1.3 / k:.2g}× its own hoop "
-               "strain (default 10), which no number of multiplier updates removes in time")  # fmt: skip
+               "strain (default 10), too far for the multiplier updates to remove")  # fmt: skip
         fail("physics.kappa_hat", f"= {k:g} is less than {MIN_KAPPA_HAT:g}: {why}")
     reg_limits(scene, fail)
     fabric_limits(scene, fail)
