@@ -89,7 +89,6 @@ def sleeve_run():
     return run(config.load(DEMOS / "sleeve_on_arm.toml"), _tmp(), quiet=True)
 
 
-@pytest.mark.slow  # 29 s of CPU; 50 s wall at load 3.5, 97 s at load 7 on the shared 2 cores
 def straight_edge_bias(ease: float, per_turn: int = 24) -> float:
     """Relative excess of the hoop strain E = (λ² − 1)/2 when the garment's reference mesh is
     straight-sided but its P2 displacement bends each deformed edge onto the round limb: the
@@ -99,6 +98,7 @@ def straight_edge_bias(ease: float, per_turn: int = 24) -> float:
     return ((lam * arc) ** 2 - 1.0) / (lam**2 - 1.0) - 1.0
 
 
+@pytest.mark.slow  # 29 s of CPU; 50 s wall at load 3.5, 97 s at load 7 on the shared 2 cores
 def test_sleeve_obeys_laplace_per_level(sleeve_run):
     assert sleeve_run.completed and sleeve_run.report.final_regularisation == 0.0
     checks = {c.level: c for c in cp.level_checks(sleeve_run.built, list(ARM_GIRTHS), 0.01)}
