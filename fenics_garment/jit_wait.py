@@ -36,7 +36,8 @@ _HOST = socket.gethostname()
 _original = None
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host (a lock or compile marker's owner)."""
     try:
         os.kill(pid, 0)
     except ProcessLookupError:
@@ -85,7 +86,7 @@ def _owner_alive(c: Path) -> bool:
     owner = _read_json(c.with_suffix(".c.owner"))
     pid = owner.get("pid")
     if owner.get("host") == _HOST and isinstance(pid, int):
-        return _pid_alive(pid)
+        return pid_alive(pid)
     name = c.name.removesuffix(".c")
     return _mentioned(name) or _recent(c.parent, name)
 

@@ -26,6 +26,7 @@ from pathlib import Path
 
 from fenics_garment import output
 from fenics_garment._stack import MPI
+from fenics_garment.jit_wait import pid_alive
 from fenics_garment.scene.preflight import PreflightError
 
 STATE = "run.json"
@@ -39,16 +40,6 @@ NESTED = "coarse_level"  # the error bars' coarse run, a run folder of its own
 
 class FolderBusy(PreflightError):
     """Another live run is writing the folder."""
-
-
-def _alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 def _holder(lock: Path) -> dict:
@@ -69,7 +60,7 @@ def _take(lock: Path, me: dict) -> str | None:
             if held and host == me["host"] and pid == me["pid"]:
                 return None  # this process holds it (the error bars' fine level): nested
 
-            if held and host == me["host"] and isinstance(pid, int) and not _alive(pid):
+            if held and host == me["host"] and isinstance(pid, int) and not pid_alive(pid):
                 lock.unlink(missing_ok=True)  # left by a killed run
                 continue
             if not held and time.time() - lock.stat().st_mtime > 60:
