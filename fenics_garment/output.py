@@ -241,20 +241,22 @@ def pressure_png(
 def garment_node_values(garment, f) -> Array:
     """Values of a P1 Function ``f`` (scalar or vector) at the garment's gmsh nodes, (n, bs).
 
-    For P1 on a linear mesh the cell's dofs and geometry nodes follow the same reference-vertex
-    order, so each geometry node takes the value of the dof in the same cell slot; the owners'
-    values are gathered by original (gmsh) node number and shared with every rank.
+    The cell's P1 dofs and its first geometry nodes (the vertices, also on a curved order-2
+    mesh) follow the same reference-vertex order, so each vertex node takes the value of the
+    dof in the same cell slot; the owners' values are gathered by original (gmsh) node number
+    and shared with every rank.
     """
     from fenics_garment._stack import MPI
 
     mesh = f.function_space.mesh
     bs = f.function_space.dofmap.index_map_bs
-    gdm = mesh.geometry.dofmaps[0]
     vdm = f.function_space.dofmap.list
+    gdm = mesh.geometry.dofmaps[0][:, : vdm.shape[1]]
+    nodes = np.unique(gdm.ravel())
     node_dof = np.empty(len(mesh.geometry.x), dtype=np.int64)
     node_dof[gdm.ravel()] = vdm.ravel()
-    vals = f.x.array.reshape(-1, bs)[node_dof]
-    gidx = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+    vals = f.x.array.reshape(-1, bs)[node_dof[nodes]]
+    gidx = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)[nodes]
     out = np.zeros((len(garment.points), bs))
     seen = np.zeros(len(garment.points))
     out[gidx] = vals

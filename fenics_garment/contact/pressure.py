@@ -54,7 +54,7 @@ def garment_pressure(
     force = dolfinx.fem.Expression(t_n * dA, state.points).eval(state.mesh, state._cells) * w
     area = dolfinx.fem.Expression(area_stretch * dA, state.points).eval(state.mesh, state._cells)
     area = area * w
-    if state._unique is None:
+    if state.rule != "vertex" or state._unique is None:
         ratio = force.sum(axis=1) / area.sum(axis=1)
         return np.repeat(ratio, force.shape[1])
     force, area = force.ravel(), area.ravel()

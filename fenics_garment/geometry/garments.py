@@ -20,6 +20,13 @@ Construction (the garment mesh is the shell's **stress-free reference configurat
    groups name panels (``front``, ``back`` or ``front_left``/``front_right``) and edges
    (``hem``, ``neckline``, ``armhole_left``/``_right``, ``side_seam_left``/``_right``,
    ``shoulder_seam_left``/``_right``, ``opening_left``/``_right``, ``welt``, ``top``).
+5. With ``order=2`` (the default) the DOLFINx mesh is **curved**: gmsh adds a node at each edge
+   midpoint, on the lofted surface (``setOrder(2)``), and the mesh's coordinate element is P2.
+   A straight-sided (P1) reference is a polygon: a P2 displacement that makes it round again
+   stretches each edge from its chord to its arc, an extra strain ≈ (h/R)²/24 for edges of
+   length h on a curvature radius R — measured +9.6 / +2.7 % in the tube's Laplace pressure at
+   h = 4 / 2 cm. The plain arrays (``points``, ``cells``) stay the vertex nodes and 3-node
+   triangles (pictures, tables), numbered as the DOLFINx mesh's first geometry nodes.
 
 Between levels the loft interpolates, so ``d`` is exact at the levels and smooth in between.
 Directions: +z up, the body faces −y, its left is +x; the warp (fabric length direction) is the
@@ -115,8 +122,15 @@ class GarmentSurface:
         return self.edges[name]
 
     def node_values(self, values: Array) -> Array:
-        """Per-gmsh-node ``values`` reordered to this rank's DOLFINx geometry nodes."""
-        return values[np.asarray(self.mesh.geometry.input_global_indices, dtype=np.int64)]
+        """Per-gmsh-node ``values`` reordered to this rank's DOLFINx geometry nodes.
+
+        On a curved (order-2) mesh the edge nodes are not in the arrays: they get NaN.
+        """
+        idx = np.asarray(self.mesh.geometry.input_global_indices, dtype=np.int64)
+        vertex = idx < len(self.points)
+        out = np.full((len(idx), *np.shape(values)[1:]), np.nan)
+        out[vertex] = np.asarray(values)[idx[vertex]]
+        return out
 
     def warp_function(self, V: Any) -> Any:
         """The warp direction as a DOLFINx Function on the vector space ``V``.
@@ -169,7 +183,7 @@ class GarmentSurface:
         if dm.shape[1] == 4 and mesh.topology.cell_name() == "quadrilateral":
             p1, p2 = x[dm[:, 1]], x[dm[:, 2]]  # DOLFINx quad order: 0-1 / 2-3 tensor layout
         nc = np.cross(p1 - p0, p2 - p0)
-        out = n_out[dm[:, :3]].sum(axis=1)
+        out = n_out[dm[:, :3]].sum(axis=1)  # vertex nodes come first on a curved mesh too
         return np.where(np.einsum("ij,ij->i", nc, out) >= 0, 1, -1).astype(np.int8)
 
     # -- plain-array helpers ------------------------------------------------------------------
@@ -293,8 +307,11 @@ def _build(
     quads: bool,
     max_degree: int = -1,
     per_circle: int = 0,
+    order: int = 2,
 ) -> dict[str, Any]:
     """Loft, cut, mesh, orient, name; returns the plain arrays (on the gmsh rank).
+
+    ``order``: geometry degree of the mesh handed to DOLFINx (1 straight, 2 curved: module doc).
 
     ``max_degree``: the loft's degree cap (see :func:`add_loft`); the dress needs 3 (measured at
     h = 3 cm: OCC's default folds the skirt across the axis, 423 triangles, min angle 3.3°;
@@ -365,7 +382,34 @@ def _build(
             s += float(np.sum(nrm[:, 0] * rad[:, 0] + nrm[:, 1] * rad[:, 1]))
         if s < 0:
             g.model.mesh.reverse([(2, f)])
-    return _extract(g, kind, panels, edges, panel_faces, curves)
+    data = _extract(g, kind, panels, edges, panel_faces, curves)
+    if order == 2:
+        _curve(g, data["points"])
+    elif order != 1:
+        raise ValueError(f"garment geometry order must be 1 or 2, got {order}")
+    return data
+
+
+def _curve(g: Any, vertices: Array) -> None:
+    """Raise the mesh to order 2 (edge nodes on the CAD surface), keeping the vertex numbering.
+
+    gmsh's ``setOrder`` renumbers every node; the vertices are put back to tags 1…n (matched by
+    their coordinates, which it does not move) and the new edge nodes follow, so that
+    ``points[i]`` is still gmsh node i + 1 and DOLFINx's ``input_global_indices`` < n are the
+    vertices.
+    """
+    from scipy.spatial import cKDTree
+
+    g.model.mesh.setOrder(2)
+    tags, coords, _ = g.model.mesh.getNodes()
+    dist, idx = cKDTree(vertices).query(coords.reshape(-1, 3))
+    vertex = dist <= 1e-12 * max(1.0, float(np.abs(vertices).max()))
+    if vertex.sum() != len(vertices):
+        raise GeometryError(f"order-2 mesh: {vertex.sum()} of {len(vertices)} vertices found")
+    new = np.empty(len(tags), dtype=np.int64)
+    new[vertex] = idx[vertex] + 1
+    new[~vertex] = len(vertices) + 1 + np.arange(int((~vertex).sum()))
+    g.model.mesh.renumberNodes(tags.astype(np.int64), new)
 
 
 def _remove_all_but(g: Any, faces: list[tuple[int, int]]) -> None:
@@ -613,6 +657,7 @@ def make_gilet(
     neck_scoop: float = 0.06,
     front_opening: float | None = None,
     quads: bool = False,
+    order: int = 2,
     comm: Any | None = None,
 ) -> GarmentSurface:
     """A sleeveless gilet from ``hem`` level (2.5 cm below it) to the base of the neck.
@@ -629,6 +674,7 @@ def make_gilet(
         neck_scoop: depth (m) of the front neckline below the neck base.
         front_opening: width (m) of a centre-front opening (None: closed front).
         quads: quadrilateral cells (gmsh recombination) instead of triangles.
+        order: geometry degree of the DOLFINx mesh, 2 (curved, default) or 1 (module doc, 5).
         comm: MPI communicator: build on its rank 0 and distribute as a DOLFINx mesh.
     """
     torso = ["hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder"]
@@ -643,7 +689,9 @@ def make_gilet(
         body, levels, strap, armhole_drop, neck_scoop, 0.0, front_opening, z_hem, z_top
     )
     cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, front_opening)
-    return _finish("gilet", comm, lambda g: _build(g, "gilet", levels, cuts, cls, h, quads), table)
+    return _finish(
+        "gilet", comm, lambda g: _build(g, "gilet", levels, cuts, cls, h, quads, order=order), table
+    )
 
 
 DRESS_EASE = {
@@ -664,6 +712,7 @@ def make_dress(
     neck_scoop: float = 0.12,
     back_scoop: float = 0.10,
     quads: bool = False,
+    order: int = 2,
     comm: Any | None = None,
 ) -> GarmentSurface:
     """A one-piece dress: fitted bodice with shoulder straps (cut by wide armholes and front and
@@ -697,7 +746,10 @@ def make_dress(
     )
     cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None)
     return _finish(
-        "dress", comm, lambda g: _build(g, "dress", levels, cuts, cls, h, quads, 3), table
+        "dress",
+        comm,
+        lambda g: _build(g, "dress", levels, cuts, cls, h, quads, 3, order=order),
+        table,
     )
 
 
@@ -711,6 +763,7 @@ def make_stocking(
     h: float = 0.012,
     min_clearance: float | None = None,
     quads: bool = False,
+    order: int = 2,
     comm: Any | None = None,
 ) -> GarmentSurface:
     """A compression stocking on one leg, ankle to thigh, graduated ease (tightest at the ankle).
@@ -734,7 +787,7 @@ def make_stocking(
     return _finish(
         "stocking",
         comm,
-        lambda g: _build(g, "stocking", levels, [], cls, h, quads, per_circle=24),
+        lambda g: _build(g, "stocking", levels, [], cls, h, quads, per_circle=24, order=order),
         table,
     )
 
@@ -749,6 +802,7 @@ def make_sleeve(
     min_clearance: float | None = None,
     end: float = 0.025,
     quads: bool = False,
+    order: int = 2,
     comm: Any | None = None,
 ) -> GarmentSurface:
     """A compression sleeve on an arm from :func:`~.mannequin.make_arm`, from ``end`` below the
@@ -767,7 +821,7 @@ def make_sleeve(
     return _finish(
         "sleeve",
         comm,
-        lambda g: _build(g, "sleeve", levels, [], cls, h, quads, per_circle=24),
+        lambda g: _build(g, "sleeve", levels, [], cls, h, quads, per_circle=24, order=order),
         table,
     )
 
@@ -778,13 +832,16 @@ def make_tube(
     h: float = 0.01,
     min_clearance: float | None = None,
     quads: bool = False,
+    order: int = 2,
     comm: Any | None = None,
 ) -> GarmentSurface:
     """A sleeve/tube over a cylinder body from :func:`cylinder_body` (levels bottom, mid, top)."""
     e = _ease_dict(ease, {"bottom": 0.0, "mid": 0.0, "top": 0.0})
     levels, table = _levels_from(body, ["bottom", "mid", "top"], e, min_clearance)
     cls = _TubeClassifier(levels["bottom"][0], levels["top"][0])
-    return _finish("tube", comm, lambda g: _build(g, "tube", levels, [], cls, h, quads), table)
+    return _finish(
+        "tube", comm, lambda g: _build(g, "tube", levels, [], cls, h, quads, order=order), table
+    )
 
 
 def cylinder_body(radius: float = 0.1, length: float = 0.2, margin: float = 0.05,

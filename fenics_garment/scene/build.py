@@ -22,7 +22,7 @@ from fenics_garment.geometry.body import BodySurface
 from fenics_garment.materials import Fabric, fabric
 from fenics_garment.scene.config import Scene
 from fenics_garment.shell.kinematics import ShellGeometry
-from fenics_garment.shell.model import ShellModel
+from fenics_garment.shell.model import ELEMENTS, ShellModel
 
 
 def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
@@ -61,7 +61,7 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
 def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentSurface:
     """The garment pattern (stress-free reference) cut from ``body`` with the scene's ease."""
     g = scene.garment
-    kw: dict = {"h": g.mesh_size, "comm": comm}
+    kw: dict = {"h": g.mesh_size, "comm": comm, "order": geometry_order(scene)}
     if g.ease != {}:
         kw["ease"] = g.ease
     if g.kind == "gilet":
@@ -73,6 +73,16 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
     if g.kind == "sleeve":
         return gm.make_sleeve(body, **kw)
     return gm.make_tube(body, **kw)
+
+
+def geometry_order(scene: Scene) -> int:
+    """Degree of the garment's reference geometry: ``[garment] geometry``, where "auto" is the
+    displacement's degree (a P2 displacement on straight-sided cells adds the chord-to-arc
+    stretch of :mod:`fenics_garment.geometry.garments`, point 5)."""
+    g = scene.garment
+    if g.geometry == "auto":
+        return min(ELEMENTS[g.element].u_degree, 2)
+    return 2 if g.geometry == "curved" else 1
 
 
 def make_fabric(scene: Scene) -> Fabric:

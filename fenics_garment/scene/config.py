@@ -90,6 +90,9 @@ class GarmentConfig:
     mesh_size: float = 0.03  # target element size [m]
     element: str = "P2B-P2B"  # the verified element (shell.model.DEFAULT_ELEMENT)
     side: str = "left"  # stocking leg
+    #: reference geometry: "curved" (order-2 mesh: geometry.garments, point 5), "straight"
+    #: (order 1), or "auto" = curved for a P2 element, straight for P1
+    geometry: str = "auto"
 
 
 @dataclass(frozen=True)
@@ -172,6 +175,7 @@ EASE_LEVELS = {
 }
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
+GEOMETRIES = ("auto", "curved", "straight")
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.BodySurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
@@ -334,6 +338,7 @@ def _check(s: Scene) -> None:
                 raise _unknown(k, list(EASE_LEVELS[g.kind]), "garment.ease", src)
     _one_of(g.fabric, tuple(FABRICS), src, "garment.fabric")
     _one_of(g.element, ELEMENTS, src, "garment.element")
+    _one_of(g.geometry, GEOMETRIES, src, "garment.geometry")
     _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
     eases = g.ease.values() if isinstance(g.ease, dict) else [g.ease]
     for e in eases:

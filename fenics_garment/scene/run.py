@@ -515,6 +515,7 @@ def _outputs(
         "fabric": scene.garment.fabric,
         "element": scene.garment.element,
         "element_verified": built.model.variant.verified,
+        "geometry_degree": built.model.geometry.mesh.geometry.cmaps[0].degree,
         "dofs": built.dofs,
         "garment_cells": len(built.garment.cells),
         "body_triangles": len(built.body.triangles),
