@@ -75,6 +75,8 @@ def child(spec: dict) -> dict:
     s = config.load(spec.get("scene", GILET))
     variant = spec.get("variant", "default")
     g = replace(s.garment, mesh_size=spec["mesh_size"])
+    if "per_turn" in spec:  # limbs: elements per turn of curvature (benchmarks/convergence.py)
+        g = replace(g, per_turn=spec["per_turn"])
     phys = s.physics
     if variant == "friction-off":
         phys = replace(phys, friction=0.0)
@@ -149,6 +151,7 @@ def _record(res, spec: dict, comm) -> dict:
         "regions_p95_kPa": {r["region"]: r["p95_kPa"] for r in sm["regions"]},
         "regions_max_kPa": {r["region"]: r["max_kPa"] for r in sm["regions"]},
         "element": sm["element"],
+        "geometry_degree": sm.get("geometry_degree"),
         "max_penetration_over_thickness": sm["max_penetration_over_thickness"],
         "al_updates": sm["dressing"].get("augmented_lagrangian_updates"),
         "final_regularisation": sm["dressing"]["final_regularisation_Pa_per_m"],
@@ -157,6 +160,7 @@ def _record(res, spec: dict, comm) -> dict:
         "release_its": sum(x["iterations"] for x in steps if x["stage"] == "release"),
         "body_surface": spec.get("body_surface"),
         "body_mesh_size": spec.get("body_mesh_size"),
+        "per_turn": spec.get("per_turn"),
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve
         "final_ratios": [(x["stage"], x["iterations"], x.get("final_ratios")) for x in steps],
         "failed_attempts": len(sm["dressing"]["failed_attempts"]),

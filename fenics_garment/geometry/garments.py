@@ -762,6 +762,7 @@ def make_stocking(
     ease: float | dict[str, float] = STOCKING_EASE,
     h: float = 0.012,
     min_clearance: float | None = None,
+    per_turn: int = 24,
     quads: bool = False,
     order: int = 2,
     comm: Any | None = None,
@@ -769,7 +770,8 @@ def make_stocking(
     """A compression stocking on one leg, ankle to thigh, graduated ease (tightest at the ankle).
 
     Default ease (−20 % ankle … −10 % thigh) is our illustrative graduation, not a class of a
-    compression standard.
+    compression standard. ``per_turn``: elements per turn of curvature (at most ``h``), the
+    resolution of the leg's round sections (:func:`_mesh_options`).
     """
     e = _ease_dict(ease, STOCKING_EASE)
     lv = ["ankle", "calf", "knee", "thigh"]
@@ -787,7 +789,9 @@ def make_stocking(
     return _finish(
         "stocking",
         comm,
-        lambda g: _build(g, "stocking", levels, [], cls, h, quads, per_circle=24, order=order),
+        lambda g: _build(
+            g, "stocking", levels, [], cls, h, quads, per_circle=per_turn, order=order
+        ),
         table,
     )
 
@@ -801,6 +805,7 @@ def make_sleeve(
     h: float = 0.01,
     min_clearance: float | None = None,
     end: float = 0.025,
+    per_turn: int = 24,
     quads: bool = False,
     order: int = 2,
     comm: Any | None = None,
@@ -810,7 +815,8 @@ def make_sleeve(
 
     The end sections repeat the wrist's and the upper arm's (the arm's stubs are prismatic), so
     the levels themselves lie ``end`` away from the free edges. Default ease (−7 % wrist …
-    −5.5 % upper arm) is our illustrative graduation, not a compression class.
+    −5.5 % upper arm) is our illustrative graduation, not a compression class. ``per_turn``:
+    elements per turn of curvature (at most ``h``; :func:`_mesh_options`).
     """
     e = _ease_dict(ease, SLEEVE_EASE)
     z_w, z_u = body.landmarks["wrist"], body.landmarks["upper_arm"]
@@ -821,7 +827,7 @@ def make_sleeve(
     return _finish(
         "sleeve",
         comm,
-        lambda g: _build(g, "sleeve", levels, [], cls, h, quads, per_circle=24, order=order),
+        lambda g: _build(g, "sleeve", levels, [], cls, h, quads, per_circle=per_turn, order=order),
         table,
     )
 

@@ -69,9 +69,9 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
     if g.kind == "dress":
         return gm.make_dress(body, **kw)
     if g.kind == "stocking":
-        return gm.make_stocking(body, side=g.side, **kw)
+        return gm.make_stocking(body, side=g.side, per_turn=g.per_turn, **kw)
     if g.kind == "sleeve":
-        return gm.make_sleeve(body, **kw)
+        return gm.make_sleeve(body, per_turn=g.per_turn, **kw)
     return gm.make_tube(body, **kw)
 
 

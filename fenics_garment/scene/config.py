@@ -93,6 +93,8 @@ class GarmentConfig:
     #: reference geometry: "curved" (order-2 mesh: geometry.garments, point 5), "straight"
     #: (order 1), or "auto" = curved for a P2 element, straight for P1
     geometry: str = "auto"
+    #: sleeve and stocking: elements per turn of the limb's curvature (at most mesh_size)
+    per_turn: int = 24
 
 
 @dataclass(frozen=True)
@@ -339,6 +341,7 @@ def _check(s: Scene) -> None:
     _one_of(g.fabric, tuple(FABRICS), src, "garment.fabric")
     _one_of(g.element, ELEMENTS, src, "garment.element")
     _one_of(g.geometry, GEOMETRIES, src, "garment.geometry")
+    _require(g.per_turn >= 8, src, "garment.per_turn", f"must be at least 8, got {g.per_turn}")
     _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
     eases = g.ease.values() if isinstance(g.ease, dict) else [g.ease]
     for e in eases:
