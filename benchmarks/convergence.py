@@ -13,7 +13,12 @@ regions.
 
 Writes ``benchmarks/results/convergence.json`` and ``convergence-<scene>.png``.
 
-    python -m benchmarks.convergence [--quick] [scene ...] [--levels N]
+    python -m benchmarks.convergence [--quick] [scene ...] [--levels N] [--variant friction-off]
+
+``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) separates the
+discretisation error from the dependence of a frictional answer on its loading path: with
+friction the final state depends on how the garment was put on, and the adaptive dressing
+takes different steps on each mesh.
 """
 
 from __future__ import annotations
@@ -56,11 +61,11 @@ def sizes(h0: float, n: int) -> list[float]:
     return [h0 * RATIO**k for k in range(n)]
 
 
-def run_scene(stem: str, h0: float, n: int, say) -> list[dict]:
+def run_scene(stem: str, h0: float, n: int, say, variant: str = "default") -> list[dict]:
     recs = []
     for k, h in enumerate(sizes(h0, n)):
         t0 = time.perf_counter()
-        spec = {"scene": str(SCENES / f"{stem}.toml"), "mesh_size": h}
+        spec = {"scene": str(SCENES / f"{stem}.toml"), "mesh_size": h, "variant": variant}
         if stem in PER_TURN:
             spec["per_turn"] = round(PER_TURN[stem] / RATIO**k)
         r = scene_bench.spawn(spec, timeout=3600)
@@ -150,8 +155,9 @@ def markdown(d: dict) -> str:
             )
         target = ana.get("key_p95_within_target")
         out += ["", f"Key regions' p95 within ±{TARGET:.0%} at each mesh: {target}", ""]
-        if (RESULTS / f"convergence-{stem}.png").exists():
-            out += [f"![convergence-{stem}](convergence-{stem}.png)", ""]
+        png = f"convergence-{stem.replace(':', '-')}.png"
+        if (RESULTS / png).exists():
+            out += [f"![convergence-{stem}]({png})", ""]
     return "\n".join(out)
 
 
@@ -175,7 +181,7 @@ def plot(stem: str, ana: dict) -> None:
     ax.set_title(f"{stem}: p95 per region, error bars = grid convergence index")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    fig.savefig(RESULTS / f"convergence-{stem}.png", dpi=110)
+    fig.savefig(RESULTS / f"convergence-{stem.replace(':', '-')}.png", dpi=110)
     plt.close(fig)
 
 
@@ -187,6 +193,7 @@ def main(argv: list[str] | None = None) -> int:
         n_override = int(argv[argv.index("--levels") + 1])
     table = QUICK if quick else LEVELS
     names = [a for a in argv if a in LEVELS] or list(table)
+    variant = argv[argv.index("--variant") + 1] if "--variant" in argv else "default"
     say = lambda *a: print(*a, flush=True)  # noqa: E731
     path = RESULTS / "convergence.json"
     data = json.loads(path.read_text()) if path.exists() else {"scenes": {}}
@@ -194,13 +201,14 @@ def main(argv: list[str] | None = None) -> int:
         h0, n = table.get(stem, LEVELS[stem])
         n = n_override or n
         say(f"{stem}: garment meshes {[round(h * 1e3, 1) for h in sizes(h0, n)]} mm")
-        recs = run_scene(stem, h0, n, say)
+        recs = run_scene(stem, h0, n, say, variant)
         ana = analyse(recs)
-        data["scenes"][stem] = {"runs": recs, "analysis": ana, "loadavg": os.getloadavg()}
+        key = stem if variant == "default" else f"{stem}:{variant}"
+        data["scenes"][key] = {"runs": recs, "analysis": ana, "loadavg": os.getloadavg()}
         RESULTS.mkdir(exist_ok=True)
         path.write_text(json.dumps(data, indent=1, default=float))
         if ana["regions"]:
-            plot(stem, ana)
+            plot(key, ana)
             for name, row in ana["regions"].items():
                 if "p95" in row:
                     c = row["p95"]

@@ -108,8 +108,10 @@ def attach(fine: list[dict], coarse: list[dict], rate: float = RATE) -> list[dic
 
 
 def coarse_scene(scene: config.Scene) -> config.Scene:
-    """The scene on the coarser garment mesh (2h), with no files but the summary."""
-    g = replace(scene.garment, mesh_size=2.0 * scene.garment.mesh_size)
+    """The scene on the coarser garment mesh (2h, and half the elements per turn of a limb's
+    curvature), with no files but the summary."""
+    g = scene.garment
+    g = replace(g, mesh_size=2.0 * g.mesh_size, per_turn=max(8, round(g.per_turn / 2)))
     o = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
     return replace(scene, garment=g, output=o)
 
