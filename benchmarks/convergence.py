@@ -130,7 +130,11 @@ def markdown(d: dict) -> str:
            "`--error-bars` estimate at the finest mesh (h against 2h, rate 1).", ""]  # fmt: skip
     for stem, sc in d.get("scenes", {}).items():
         ana = sc.get("analysis", {})
-        out += [f"### {stem}", "", sc.get("note", ""), "",
+        runs = [r for r in sc.get("runs", []) if r.get("status") == "ok"]
+        degree = runs[0].get("geometry_degree") or 1 if runs else None
+        geometry = {1: "straight-sided (order 1)", 2: "curved (order 2)"}.get(degree, "?")
+        out += [f"### {stem}", "", sc.get("note", ""),
+                f"Element {runs[0]['element'] if runs else '?'}, garment geometry {geometry}.", "",
                 "| h [mm] | dofs | solves | Newton its | failed tries | completed | "
                 "penetration / h | wall [s] |", "|---|---|---|---|---|---|---|---|"]  # fmt: skip
         for r in sc.get("runs", []):
