@@ -45,9 +45,12 @@ def test_error_bar_covers_the_true_error_of_the_tube():
     comm = MPI.COMM_WORLD
     tmp = Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))
     s = config.load(SCENE)
+    # the straight-sided garment mesh: a case with a discretisation error to cover (its
+    # chord-to-arc stretch, +1.9 % at 2 cm; on the curved mesh the error left, 0.2 %, is the
+    # free ends' and the multiplier tolerance's, which the bar does not claim to cover)
     s = replace(
         s,
-        garment=replace(s.garment, mesh_size=0.02),
+        garment=replace(s.garment, mesh_size=0.02, geometry="straight"),
         physics=replace(s.physics, contact="augmented-lagrangian", tolerance=1e-3,
                         max_updates=10),
         output=replace(s.output, vtx=False, xdmf=False, pictures=False, error_bars=True),
