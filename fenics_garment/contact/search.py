@@ -177,6 +177,10 @@ class BodySurface:
             raise ValueError(f"normal must be 'phong', 'gradient' or 'face', not {normal!r}")
         return ClosestPoints(signed, c, face, n)
 
+    def barycentric(self, c: F64, face: I64) -> F64:
+        """Barycentric coordinates (n, 3) of the points ``c`` in their triangles ``face``."""
+        return self._barycentric(c, face)
+
     def _barycentric(self, c: F64, face: I64) -> F64:
         v = self.vertices[self.triangles[face]]  # (n, 3, 3)
         e1, e2, r = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0], c - v[:, 0]
@@ -268,3 +272,15 @@ class BroadPhase:
             self._n0[near] = res.normal
         self.skipped_fraction = float(1.0 - near.sum() / n) if n else 0.0
         return d, nrm, hess
+
+    def memory(self) -> dict[str, F64]:
+        """The last exact search: points ``x0``, distances ``d0`` and normals ``n0`` (empty
+        before the first query)."""
+        if self._x0 is None:
+            return {}
+        return {"x0": self._x0, "d0": self._d0, "n0": self._n0}
+
+    def restore(self, memory: dict[str, F64]) -> None:
+        """Put back a :meth:`memory` (copies)."""
+        if memory:
+            self._x0, self._d0, self._n0 = (memory[k].copy() for k in ("x0", "d0", "n0"))

@@ -43,7 +43,6 @@ from fenics_garment.scene.dressing import (
     Progress,
     dress,
 )
-from fenics_garment.shell.energy import membrane_forces
 from fenics_garment.shell.model import DEFAULT_ELEMENT
 from fenics_garment.solve import NonlinearSolver
 
@@ -89,7 +88,7 @@ def _membrane_fields(model) -> ufl.core.expr.Expr:
     eps = kin.membrane
     a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
     e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
-    N = membrane_forces(kin, model.C)
+    N = model.membrane_forces()  # of the membrane law in use
     return ufl.as_vector([e_max, N[0, 0], N[1, 1], N[0, 1]])
 
 
