@@ -131,7 +131,13 @@ def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
 
 @dataclass
 class Built:
-    """Everything a dressing run needs."""
+    """The scene's problem, as plain values: everything a dressing run needs.
+
+    Edit it between :func:`build` and the solve (``scene.run``'s ``terms`` hook): the shell's
+    energy laws are ``model.membrane`` etc., further terms go through ``model.add_energy`` /
+    ``model.add_residual``, the contact laws are ``contact.normal_law`` and
+    ``contact.friction.law``; :meth:`terms` lists what is in use.
+    """
 
     scene: Scene
     body: BodySurface
@@ -148,6 +154,26 @@ class Built:
     def dofs(self) -> int:
         im = self.model.Q.dofmap.index_map
         return im.size_global * self.model.Q.dofmap.index_map_bs
+
+    def terms(self) -> dict:
+        """The laws and terms in use, by name (recorded in ``summary.json``)."""
+        m, c = self.model, self.contact
+        return {
+            **{k: _name(getattr(m, k)) for k in ("membrane", "bending", "shear", "drilling")},
+            "added_energies": [_name(d) for d, _ in m._energy],
+            "added_residuals": len(m._extra_residual),  # contact, regularisation, user terms
+            "loads": {"dead": len(m._work), "follower": len(m._follower)},
+            "normal_law": _name(c.normal_law),
+            "friction_law": _name(c.friction.law) if c.friction is not None else None,
+            "constraints": len(self.bcs),
+        }
+
+
+def _name(term) -> str:
+    """``module.function`` of a law (``expression`` for a UFL density)."""
+    if callable(term):
+        return f"{getattr(term, '__module__', '?')}.{getattr(term, '__qualname__', repr(term))}"
+    return "expression"
 
 
 def outward_from_axis(body: BodySurface):
