@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fenics_garment._stack import MPI, dolfinx, ufl
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.contact.state import ContactState
 
 F64 = npt.NDArray[np.float64]
@@ -85,7 +85,7 @@ def positions(state: ContactState) -> F64:
     return state.positions()
 
 
-def body_pressure(state: ContactState, t_n: ufl.core.expr.Expr, body: BodySurface) -> F64:
+def body_pressure(state: ContactState, t_n: ufl.core.expr.Expr, body: SearchSurface) -> F64:
     """Pressure on the body surface at its vertices [Pa], identical on every rank."""
     f = point_forces(state, t_n)
     active = f > 0
@@ -165,7 +165,7 @@ def body_pressure_map(
     pg = np.zeros(n_global)
     for gi, xi, pi in comm.allgather((gidx, x, p.x.array[:n_owned])):
         xg[gi], pg[gi] = xi, pi
-    garment = BodySurface(xg, np.vstack(comm.allgather(cells)))
+    garment = SearchSurface(xg, np.vstack(comm.allgather(cells)))
     res = garment.closest(np.asarray(body_vertices, dtype=np.float64))
     bary = garment.barycentric(res.point, res.face)
     values = np.einsum("ij,ij->i", bary, pg[garment.triangles[res.face]])

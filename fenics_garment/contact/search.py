@@ -14,7 +14,7 @@ AABB tree) is built once per scene; each rank queries only its own garment point
   ``(x − c)/|x − c|`` off the surface (continuous outside, falls back to Phong within
   ``1e-12`` m of the surface). The distance itself is always the exact one.
 * **Crop to the garment's reach** (:func:`reach_mask`): body triangles outside the garment's
-  bounding box grown by a margin are left out of the AABB tree (``BodySurface(..., keep=)``).
+  bounding box grown by a margin are left out of the AABB tree (``SearchSurface(..., keep=)``).
   Face indices, normals and pseudonormals stay those of the whole body, so for every point whose
   distance to the body is below ``margin − (its travel out of the box)`` the answer is exactly the
   uncropped one: the triangle holding its closest point meets the grown box.
@@ -68,7 +68,7 @@ class ClosestPoints:
     hessian: F64 | None = None
 
 
-class BodySurface:
+class SearchSurface:
     """A closed (or open, consistently oriented) triangulated body surface with an AABB tree.
 
     Args:
@@ -102,7 +102,7 @@ class BodySurface:
         else:
             self._face_ids = np.flatnonzero(np.asarray(keep, dtype=bool)).astype(np.int64)
             if len(self._face_ids) == 0:
-                raise ValueError("BodySurface: the crop keeps no triangle of the body")
+                raise ValueError("SearchSurface: the crop keeps no triangle of the body")
         self._searched = np.ascontiguousarray(f[self._face_ids])
         self.dropped = len(f) - len(self._face_ids)
         self._tree = igl.AABB()
@@ -245,7 +245,7 @@ class BroadPhase:
     _n0: F64 | None = field(default=None, repr=False)
 
     def query(
-        self, body: BodySurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
+        self, body: SearchSurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
     ) -> tuple[F64, F64, F64 | None]:
         """Signed distance, normal and (smooth body) Hessian of every point of ``x``, searching
         only the candidates; a skipped point keeps its last normal and gets a zero Hessian."""

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import laws, pressure, terms
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.contact.state import ContactState
 
 
@@ -109,7 +109,7 @@ class ShellContact:
 
 def attach(
     model,
-    body: BodySurface,
+    body: SearchSurface,
     *,
     kappa: float | None = None,
     kappa_hat: float = 10.0,

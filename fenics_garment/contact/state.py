@@ -38,7 +38,7 @@ import numpy.typing as npt
 
 from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.contact import laws
-from fenics_garment.contact.search import BodySurface, BroadPhase
+from fenics_garment.contact.search import BroadPhase, SearchSurface
 
 F64 = npt.NDArray[np.float64]
 
@@ -81,7 +81,7 @@ def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
 
 
 @dataclass
-class Timings:
+class SearchTimings:
     """Accumulated wall time [s] and call counts of the refresh."""
 
     search_s: float = 0.0
@@ -113,7 +113,7 @@ class ContactState:
         self,
         mesh: dolfinx.mesh.Mesh,
         u: ufl.core.expr.Expr,
-        body: BodySurface,
+        body: SearchSurface,
         *,
         offset: float,
         rule: str = "vertex",
@@ -166,7 +166,7 @@ class ContactState:
                 centre = len(mesh.geometry.x) + self._cells[:, None]
                 nodes = np.hstack([nodes, centre])
             self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
-        self.timings = Timings()
+        self.timings = SearchTimings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
         self.kappa: dolfinx.fem.Constant | None = None  # normal penalty (friction's t_N)

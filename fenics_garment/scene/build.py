@@ -144,7 +144,7 @@ class Built:
     garment: gm.GarmentSurface
     model: ShellModel
     contact: shell_contact.ShellContact
-    search_body: search.BodySurface
+    search_body: search.SearchSurface
     regularisation: Regularisation
     bcs: list
     mu: dolfinx.fem.Constant | None
@@ -201,7 +201,7 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     p = scene.physics
     gravity = model.add_gravity() if p.gravity else None
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
-    surface = SmoothBody if p.body_surface == "smooth" else search.BodySurface
+    surface = SmoothBody if p.body_surface == "smooth" else search.SearchSurface
     sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
     contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
                                    kappa_hat=p.kappa_hat, rule=_rule(model),

@@ -185,7 +185,7 @@ EASE_LEVELS = {
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
-BODY_SURFACES = ("faceted", "smooth")  # contact.search.BodySurface | contact.smooth.SmoothBody
+BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 
