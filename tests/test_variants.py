@@ -24,7 +24,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from fenics_garment._stack import dolfinx
+from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.contact import laws, uzawa
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.primitives import cylinder
@@ -156,3 +156,31 @@ def test_replace_membrane_with_contact_attached(tube):
     finally:
         q.x.array[:] = 0.0
         q.x.scatter_forward()
+
+
+def test_add_energy_expression_and_law(tube):
+    """``add_energy`` takes a UFL density or a law (kin, C) -> ψ; on a ``replace`` copy it does
+    not touch the original. At a rigid translation c the shell's own energy vanishes, so
+    Π = ∫ (½ k |u|² + ½ k |u|²) dA = k |c|² A."""
+    model, _ = tube
+    copy = replace(model)
+    k = 3.0e4
+    copy.add_energy(0.5 * k * ufl.dot(copy.u, copy.u))
+    copy.add_energy(lambda kin, C: 0.5 * k * ufl.dot(copy.u, copy.u))
+    assert model._energy == [] and len(copy._energy) == 2
+    c = np.array([1e-3, -2e-3, 5e-4])
+    V, dofs = model.Q.sub(0).collapse()
+    u = dolfinx.fem.Function(V)
+    u.interpolate(lambda x: np.outer(c, np.ones(x.shape[1])))
+    comm = model.geometry.mesh.comm
+    area = comm.allreduce(
+        dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * model.dx_full)), op=MPI.SUM
+    )
+    try:
+        model.q.x.array[dofs] = u.x.array
+        model.q.x.scatter_forward()
+        energy = copy.energy_value(copy.internal_energy())
+        assert energy == pytest.approx(k * (c @ c) * area, rel=1e-8)
+    finally:
+        model.q.x.array[:] = 0.0
+        model.q.x.scatter_forward()

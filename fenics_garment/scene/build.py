@@ -171,9 +171,9 @@ class Built:
 
 def _name(term) -> str:
     """``module.function`` of a law (``expression`` for a UFL density)."""
-    if callable(term):
-        return f"{getattr(term, '__module__', '?')}.{getattr(term, '__qualname__', repr(term))}"
-    return "expression"
+    if isinstance(term, ufl.core.expr.Expr):  # (UFL expressions are callable too)
+        return "expression"
+    return f"{getattr(term, '__module__', '?')}.{getattr(term, '__qualname__', repr(term))}"
 
 
 def outward_from_axis(body: BodySurface):

@@ -13,6 +13,7 @@ thickness fails at once, naming the file and the key, instead of deep inside a N
     ease = { waist = -0.04 }    # fraction of the body girth per level (or one number)
     [physics]
     friction = 0.4
+    terms = "my_laws.py:terms"  # optional: edits the built problem before the solve
     [dressing]
     steps = 4
 

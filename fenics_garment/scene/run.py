@@ -1,5 +1,11 @@
 """Run a scene: build, dress, write outputs (seed paper §4.1, steps 1–12).
 
+Three stages, :func:`build_stage` → :func:`solve_stage` → :func:`write_stage`. Between build and
+solve the problem (:class:`~fenics_garment.scene.build.Built`: energy laws, contact and
+friction laws, loads, constraints, as plain values) is handed to the scene's
+``[physics] terms = "module:function"`` hook and to ``run(..., terms=hook)``, which may replace
+laws or add terms (``demos/variants.py``); every output is then derived from the terms in use.
+
 One output folder per run, ``<output.folder>/<name>/``:
 
 * ``scene_used.toml`` — the scene with every default filled in;

@@ -203,7 +203,7 @@ class ShellModel:
         else:
             Pi += psi_ms * self.dx_full
         for density, measure in self._energy:
-            psi = density(kin, C) if callable(density) else density
+            psi = density if isinstance(density, ufl.core.expr.Expr) else density(kin, C)
             Pi += psi * measure
         return Pi
 
@@ -293,7 +293,7 @@ class ShellModel:
             for p in self._follower:
                 F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
         for extra in self._extra_residual:
-            F += self.extra_switch * (extra() if callable(extra) else extra)
+            F += self.extra_switch * (extra if isinstance(extra, ufl.Form) else extra())
         return F
 
     def jacobian(self, F: ufl.Form) -> ufl.Form:
