@@ -68,6 +68,12 @@ def strains(result) -> tuple[float, float, float, float]:
     return R_c, r0, lam, math.sqrt(1 + 2 * e_zz)
 
 
+def laplace(result) -> float:
+    """Laplace's pressure of the quadratic membrane law with free ends (``tube_pressure``)."""
+    R_c, r0, _, _ = strains(result)
+    return tube_pressure(R_c, r0, result.built.model.stiffness, warp="axial")
+
+
 def mid_region(result) -> np.ndarray:
     """The contact points in the middle half of the tube (z within L/4 of the middle)."""
     st = result.built.contact.state
@@ -97,19 +103,40 @@ def newton_orders(result) -> list[float]:
     return orders
 
 
-def check(result, p_expected: float, label: str) -> float:
-    """Assert completion, the pressure within 2 % and quadratic Newton steps; print a line."""
+def check(result, p_expected: float, label: str, tol: float) -> float:
+    """Assert completion, the pressure within ``tol`` of ``p_expected`` and quadratic Newton
+    steps; print a line; return the measured pressure."""
     assert result.completed, result.message
     p = mid_pressure(result)
     orders = newton_orders(result)
     if comm.rank == 0:
-        print(f"{label:<28} p = {p:8.1f} Pa   expected {p_expected:8.1f} Pa "
+        print(f"{label:<28} p = {p:8.1f} Pa   Laplace {p_expected:8.1f} Pa "
               f"({p / p_expected - 1:+.2%})   Newton orders {np.round(orders, 2)}")  # fmt: skip
-    assert abs(p / p_expected - 1) < 0.02, (label, p, p_expected)
+    assert abs(p / p_expected - 1) < tol, (label, p, p_expected)
     assert orders and max(orders) > 1.8, (label, orders)
     return p
 
 
+def say(text: str) -> None:
+    if comm.rank == 0:
+        print(text)
+
+
+# -
+
+# ## The baseline, and what it shares with every variant
+#
+# The garment's reference mesh is straight-sided while its P2 displacement bends every deformed
+# edge onto the round body, so the deformed hoop is an arc over each chord: a known O(h²) bias
+# of the hoop stretch (arc/chord − 1 ≈ θ²/24, θ = 2π/30 here; about +3 % in pressure at this
+# 2 cm mesh, README "Verification"). It is the same in every variant, so each variant is checked
+# by its *change* from the baseline run with the default laws — a ratio for a law that scales
+# the hoop tension, a difference for an added pressure — against the change the analytic
+# solution predicts.
+
+# +
+baseline = run(replace(base, name="variant-baseline"), OUT, quiet=True)
+p_base = check(baseline, laplace(baseline), "baseline (default laws)", tol=0.04)
 # -
 
 # ## 1. A strain-stiffening membrane
@@ -143,21 +170,33 @@ stiff = run(replace(base, name="variant-stiffening"), OUT, quiet=True, terms=use
 # The quartic term adds only to the hoop resultant, $S = (A_{22} - A_{12}^2/A_{11})E
 # + A_{22}E^3/\varepsilon_*^2$; the axial condition $S_{zz} = 0$, hence $\lambda_z$, is
 # unchanged. So the stiffened law's Laplace pressure is the quadratic one plus
-# $(\lambda/\lambda_z)\,A_{22}E^3/(\varepsilon_*^2 R_c)$, and the output $N_{22}$ must equal
-# $S$ (the output once showed the old law's 39.9 N/m against the true 67.1 N/m).
+# $(\lambda/\lambda_z)\,A_{22}E^3/(\varepsilon_*^2 R_c)$: at $E = 0.081$ the pressure rises
+# by about 70 %. The measured rise over the baseline must match the predicted one to 1.5 %,
+# and so must the rise of the membrane-force output $N_{22}$ — derived from the law in use (it
+# once showed the old law's 39.9 N/m against the true 67.1 N/m).
+
 
 # +
+def hoop_force_mid(result) -> float:
+    """Mean output N₂₂ [N/m] over the contact points of the middle half (all ranks)."""
+    st = result.built.contact.state
+    n22 = st.evaluate(result.built.model.membrane_forces()[1, 1]).ravel()[mid_region(result)]
+    return comm.allreduce(n22.sum(), op=MPI.SUM) / comm.allreduce(len(n22), op=MPI.SUM)
+
+
 s = stiff.built.model.stiffness
 R_c, r0, lam, lz = strains(stiff)
 E = (lam**2 - 1) / 2
 extra = s.A22 * E**3 / EPS_STAR**2
-p_stiff = tube_pressure(R_c, r0, s, warp="axial") + (lam / lz) * extra / R_c
-check(stiff, p_stiff, "stiffening membrane")
-st = stiff.built.contact.state
-N22 = st.evaluate(stiff.built.model.membrane_forces()[1, 1]).ravel()[mid_region(stiff)]
-N22_mean = comm.allreduce(N22.sum(), op=MPI.SUM) / comm.allreduce(len(N22), op=MPI.SUM)
-S_hoop = (s.A22 - s.A12**2 / s.A11) * E + extra
-assert abs(N22_mean / S_hoop - 1) < 0.02, (N22_mean, S_hoop)
+p_quad = tube_pressure(R_c, r0, s, warp="axial")
+p_stiff = check(stiff, p_quad + (lam / lz) * extra / R_c, "stiffening membrane", tol=0.06)
+rise, predicted = p_stiff / p_base, 1 + (lam / lz) * extra / R_c / p_quad
+S_quad = (s.A22 - s.A12**2 / s.A11) * E
+n_rise, n_predicted = hoop_force_mid(stiff) / hoop_force_mid(baseline), 1 + extra / S_quad
+say(f"{'':<28} pressure ×{rise:.4f} (predicted ×{predicted:.4f}), "
+    f"N22 ×{n_rise:.4f} (predicted ×{n_predicted:.4f})")  # fmt: skip
+assert abs(rise / predicted - 1) < 0.015, (rise, predicted)
+assert abs(n_rise / n_predicted - 1) < 0.015, (n_rise, n_predicted)
 assert stiff.summary["terms"]["membrane"].endswith("stiffening_membrane")
 # -
 
@@ -192,8 +231,8 @@ def use_tanh_friction(built) -> None:
 
 heavy = replace(base, name="variant-tanh-friction", physics=replace(base.physics, gravity=True))
 fric = run(heavy, OUT, quiet=True, terms=use_tanh_friction)
-check(fric, tube_pressure(*strains(fric)[:2], fric.built.model.stiffness, warp="axial"),
-      "tanh friction, gravity")  # fmt: skip
+p_fric = check(fric, laplace(fric), "tanh friction, gravity", tol=0.04)
+assert abs(p_fric / p_base - 1) < 0.005, (p_fric, p_base)  # friction changes no normal force
 forces = fric.summary["forces_N"]
 applied, reaction = np.array(forces["applied"]), np.array(forces["reaction"])
 model = fric.built.model
@@ -204,8 +243,7 @@ weight = model.stiffness.mass_per_area * 9.80665 * garment_area
 assert abs(applied[2] / -weight - 1) < 1e-6, (applied, weight)
 assert abs(reaction[2] / weight - 1) < 1e-3, (reaction, weight)
 assert fric.summary["terms"]["friction_law"].endswith("tanh_friction")
-if comm.rank == 0:
-    print(f"{'':<28} weight {weight:.4f} N, body reaction {reaction[2]:.4f} N")
+say(f"{'':<28} weight {weight:.4f} N, body reaction {reaction[2]:.4f} N")
 # -
 
 # ## 3. An elastic foundation, added as an energy
@@ -221,8 +259,7 @@ if comm.rank == 0:
 # reference area, i.e. $k_f (R_c - r_0)/(\lambda \lambda_z)$ per deformed area.
 
 # +
-p_laplace = tube_pressure(*strains(stiff)[:2], s, warp="axial")
-K_F = 0.5 * p_laplace / (R_c - r0)  # [Pa/m]: the foundation adds about half the pressure
+K_F = 0.5 * p_quad / (R_c - r0)  # [Pa/m]: the foundation adds about half the pressure
 
 
 def use_foundation(built) -> None:
@@ -235,7 +272,9 @@ def use_foundation(built) -> None:
 
 found = run(replace(base, name="variant-foundation"), OUT, quiet=True, terms=use_foundation)
 R_c, r0, lam, lz = strains(found)
-p_found = tube_pressure(R_c, r0, s, warp="axial") + K_F * (R_c - r0) / (lam * lz)
-check(found, p_found, "elastic foundation")
+p_extra = K_F * (R_c - r0) / (lam * lz)
+p_found = check(found, p_quad + p_extra, "elastic foundation", tol=0.04)
+say(f"{'':<28} added {p_found - p_base:.1f} Pa (predicted {p_extra:.1f} Pa)")
+assert abs((p_found - p_base) / p_extra - 1) < 0.015, (p_found - p_base, p_extra)
 assert found.summary["terms"]["added_energies"] == ["expression"]
 # -

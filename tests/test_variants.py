@@ -139,7 +139,7 @@ def test_replace_membrane_with_contact_attached(tube):
     model, _ = tube
     doubled = replace(model, membrane=lambda kin, C: 2.0 * model.membrane(kin, C))
     assert doubled.q is model.q and doubled.Q is model.Q
-    assert len(doubled._extra_residual) == len(model._extra_residual)
+    assert len(doubled.added_residuals) == len(model.added_residuals)
     doubled.residual()  # builds with the contact terms (no "Found different Arguments")
     q = model.q
     V, dofs = model.Q.sub(0).collapse()
@@ -167,7 +167,7 @@ def test_add_energy_expression_and_law(tube):
     k = 3.0e4
     copy.add_energy(0.5 * k * ufl.dot(copy.u, copy.u))
     copy.add_energy(lambda kin, C: 0.5 * k * ufl.dot(copy.u, copy.u))
-    assert model._energy == [] and len(copy._energy) == 2
+    assert model.added_energies == () and len(copy.added_energies) == 2
     c = np.array([1e-3, -2e-3, 5e-4])
     V, dofs = model.Q.sub(0).collapse()
     u = dolfinx.fem.Function(V)

@@ -160,9 +160,9 @@ class Built:
         m, c = self.model, self.contact
         return {
             **{k: _name(getattr(m, k)) for k in ("membrane", "bending", "shear", "drilling")},
-            "added_energies": [_name(d) for d, _ in m._energy],
-            "added_residuals": len(m._extra_residual),  # contact, regularisation, user terms
-            "loads": {"dead": len(m._work), "follower": len(m._follower)},
+            "added_energies": [_name(d) for d, _ in m.added_energies],
+            "added_residuals": len(m.added_residuals),  # contact, regularisation, user terms
+            "loads": {k: len(v) for k, v in m.loads.items()},
             "normal_law": _name(c.normal_law),
             "friction_law": _name(c.friction.law) if c.friction is not None else None,
             "constraints": len(self.bcs),

@@ -207,6 +207,21 @@ class ShellModel:
             Pi += psi * measure
         return Pi
 
+    @property
+    def added_energies(self) -> tuple:
+        """The (density, measure) pairs of :meth:`add_energy`."""
+        return tuple(self._energy)
+
+    @property
+    def added_residuals(self) -> tuple:
+        """The forms and builders of :meth:`add_residual` (contact, springs, user terms)."""
+        return tuple(self._extra_residual)
+
+    @property
+    def loads(self) -> dict[str, tuple]:
+        """The dead loads ((work density, measure) pairs) and follower pressures."""
+        return {"dead": tuple(self._work), "follower": tuple(self._follower)}
+
     def membrane_forces(self) -> ufl.core.expr.Expr:
         """N = ∂ψ_m/∂ε [N/m] of the membrane law in use (2×2, warp/weft frame)."""
         return terms.membrane_forces(self.kinematics(), self.C, self.membrane)
