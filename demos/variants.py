@@ -92,28 +92,33 @@ def mid_pressure(result) -> float:
     return comm.allreduce(f[sel].sum(), op=MPI.SUM) / comm.allreduce(a[sel].sum(), op=MPI.SUM)
 
 
-def newton_orders(result) -> list[float]:
-    """The convergence order log(r_{k+1}/r_k) / log(r_k/r_{k-1}) of the last iteration of every
-    dressing step that took at least three iterations (≈ 2 for Newton's quadratic rate)."""
-    orders = []
+def quadratic_constants(result) -> list[float]:
+    """Per dressing step, the largest C_k = ρ_{k+1}/ρ_k² of its Newton iterations after the
+    first, ρ_k = ‖F_k‖/‖F_0‖. Newton's quadratic rate keeps C bounded, ρ_{k+1} ≤ C ρ_k²
+    (measured ≤ 13 here); a linear rate ρ_{k+1} = c ρ_k (an inconsistent Jacobian, e.g. the
+    Phong normal's c ≈ 0.2) gives C = c/ρ_k, 10⁴ and more once ρ_k < 10⁻⁵."""
+    constants = []
     for step in result.report.steps:
-        if step.stage == "dress" and len(step.final_ratios) == 2:
-            lo, hi = step.final_ratios
-            orders.append(math.log(hi) / math.log(lo))
-    return orders
+        rho = np.asarray(step.residuals) / step.residuals[0] if step.residuals else []
+        if step.stage == "dress" and len(rho) >= 3:
+            constants.append(float(np.max(rho[2:] / rho[1:-1] ** 2)))
+    return constants
 
 
 def check(result, p_expected: float, label: str, tol: float) -> float:
     """Assert completion, the pressure within ``tol`` of ``p_expected`` and quadratic Newton
-    steps; print a line; return the measured pressure."""
+    steps (:func:`quadratic_constants`); print the residual histories; return the pressure."""
     assert result.completed, result.message
     p = mid_pressure(result)
-    orders = newton_orders(result)
+    constants = quadratic_constants(result)
     if comm.rank == 0:
         print(f"{label:<28} p = {p:8.1f} Pa   Laplace {p_expected:8.1f} Pa "
-              f"({p / p_expected - 1:+.2%})   Newton orders {np.round(orders, 2)}")  # fmt: skip
+              f"({p / p_expected - 1:+.2%})   Newton C {np.round(constants, 2)}")  # fmt: skip
+        for step in result.report.steps:
+            history = np.array2string(np.asarray(step.residuals), precision=2)
+            print(f"{'':<28} {step.stage:<8} ‖F‖: {history}")
     assert abs(p / p_expected - 1) < tol, (label, p, p_expected)
-    assert orders and max(orders) > 1.8, (label, orders)
+    assert constants and max(constants) < 100.0, (label, constants)
     return p
 
 
@@ -126,17 +131,16 @@ def say(text: str) -> None:
 
 # ## The baseline, and what it shares with every variant
 #
-# The garment's reference mesh is straight-sided while its P2 displacement bends every deformed
-# edge onto the round body, so the deformed hoop is an arc over each chord: a known O(h²) bias
-# of the hoop stretch (arc/chord − 1 ≈ θ²/24, θ = 2π/30 here; about +3 % in pressure at this
-# 2 cm mesh, README "Verification"). It is the same in every variant, so each variant is checked
-# by its *change* from the baseline run with the default laws — a ratio for a law that scales
-# the hoop tension, a difference for an added pressure — against the change the analytic
-# solution predicts.
+# The baseline run keeps the default laws. Its residual discretisation error (the garment's
+# curved P2 reference mesh at 2 cm on the smooth body: about −0.2 % in pressure,
+# README "Verification") is shared by every variant, so each variant is checked twice: against
+# its analytic pressure directly, and by its *change* from the baseline — a ratio for a law
+# that scales the hoop tension, a difference for an added pressure — against the change the
+# analytic solution predicts.
 
 # +
 baseline = run(replace(base, name="variant-baseline"), OUT, quiet=True)
-p_base = check(baseline, laplace(baseline), "baseline (default laws)", tol=0.04)
+p_base = check(baseline, laplace(baseline), "baseline (default laws)", tol=0.015)
 # -
 
 # ## 1. A strain-stiffening membrane
@@ -189,7 +193,7 @@ R_c, r0, lam, lz = strains(stiff)
 E = (lam**2 - 1) / 2
 extra = s.A22 * E**3 / EPS_STAR**2
 p_quad = tube_pressure(R_c, r0, s, warp="axial")
-p_stiff = check(stiff, p_quad + (lam / lz) * extra / R_c, "stiffening membrane", tol=0.06)
+p_stiff = check(stiff, p_quad + (lam / lz) * extra / R_c, "stiffening membrane", tol=0.015)
 rise, predicted = p_stiff / p_base, 1 + (lam / lz) * extra / R_c / p_quad
 S_quad = (s.A22 - s.A12**2 / s.A11) * E
 n_rise, n_predicted = hoop_force_mid(stiff) / hoop_force_mid(baseline), 1 + extra / S_quad
@@ -231,7 +235,7 @@ def use_tanh_friction(built) -> None:
 
 heavy = replace(base, name="variant-tanh-friction", physics=replace(base.physics, gravity=True))
 fric = run(heavy, OUT, quiet=True, terms=use_tanh_friction)
-p_fric = check(fric, laplace(fric), "tanh friction, gravity", tol=0.04)
+p_fric = check(fric, laplace(fric), "tanh friction, gravity", tol=0.015)
 assert abs(p_fric / p_base - 1) < 0.005, (p_fric, p_base)  # friction changes no normal force
 forces = fric.summary["forces_N"]
 applied, reaction = np.array(forces["applied"]), np.array(forces["reaction"])
@@ -273,7 +277,7 @@ def use_foundation(built) -> None:
 found = run(replace(base, name="variant-foundation"), OUT, quiet=True, terms=use_foundation)
 R_c, r0, lam, lz = strains(found)
 p_extra = K_F * (R_c - r0) / (lam * lz)
-p_found = check(found, p_quad + p_extra, "elastic foundation", tol=0.04)
+p_found = check(found, p_quad + p_extra, "elastic foundation", tol=0.015)
 say(f"{'':<28} added {p_found - p_base:.1f} Pa (predicted {p_extra:.1f} Pa)")
 assert abs((p_found - p_base) / p_extra - 1) < 0.015, (p_found - p_base, p_extra)
 assert found.summary["terms"]["added_energies"] == ["expression"]

@@ -21,6 +21,9 @@ The anchor update derived from a friction law keeps the slip the stick penalty n
 the traction, Δu_T(new anchor) = −t_T/κ_T, i.e. u_anchor ← u + t_T/κ_T: for the Coulomb return
 map that is exactly its elastic slip (a sticking point keeps its traction, a slipping one stays
 on the cone); for any law it is the slip whose stick-penalty force equals the traction carried.
+A law with no elastic range carries slightly less at that slip, so a sustained load creeps a
+little each accepted step: for t_T = −μ t_N tanh(κ_T|Δu_T|/(μ t_N)) Δu_T/|Δu_T| under a traction
+τ, by (μ t_N/κ_T)(artanh x − x) ≈ τ x²/(3κ_T), x = τ/(μ t_N).
 """
 
 from __future__ import annotations
