@@ -220,13 +220,17 @@ assert stiff.summary["terms"]["membrane"].endswith("stiffening_membrane")
 
 # +
 TINY = 1e-9  # [Pa]: keeps the law finite where μ t_N = 0 (friction off while dressing)
+#: tanh(20) = 1 in double precision; capping the argument there keeps its derivative finite
+#: (UFL differentiates tanh as sech², 2 cosh y / (cosh 2y + 1): inf/inf = NaN for y ≳ 355)
+SATURATED = 20.0
 
 
 def tanh_friction(slip, t_n, mu, kappa_t, eps=1e-30):
     """t_T = −μ t_N tanh(κ_T |Δu_T| / (μ t_N)) Δu_T / |Δu_T|."""
     norm = ufl.sqrt(ufl.dot(slip, slip) + eps)
     limit = mu * t_n
-    return -limit * ufl.tanh(kappa_t * norm / (limit + TINY)) * slip / norm
+    z = ufl.min_value(kappa_t * norm / (limit + TINY), SATURATED)
+    return -limit * ufl.tanh(z) * slip / norm
 
 
 def use_tanh_friction(built) -> None:

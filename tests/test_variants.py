@@ -13,8 +13,9 @@ normals are horizontal), small enough to stick (κ_T s ≪ μ t_N). The referenc
   reference area by the contact-point rule (≈ π r0 L / 4);
 * the scene residual tested with the rigid translation e_z: F(e_z) = −reaction (a rigid
   translation does no internal virtual work);
-* the anchor: the stick keeps it (u_old = −s e_z); the half law keeps the slip its stick
-  penalty needs, −t_T/κ_T = s e_z / 2, so u_old = −s e_z / 2.
+* the anchor: each law keeps the slip at which it carries its traction, so in stick both keep
+  it; sliding (s = 1 cm) the return map keeps its elastic slip μ t_N/κ_T, and the same law
+  with half the coefficient half of it.
 """
 
 from fenics_garment._stack import MPI  # noqa: I001
@@ -26,6 +27,7 @@ import pytest
 
 from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.contact import laws, uzawa
+from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.primitives import cylinder
 from fenics_garment.contact.search import SearchSurface
@@ -58,13 +60,13 @@ def tube():
     return model, contact
 
 
-def _slip_everywhere(contact) -> None:
+def _slip_everywhere(contact, slip: float) -> None:
     """q = 0 refreshed, every anchor at −s e_z (so Δu_T = s e_z at every point)."""
     st = contact.state
     st.refresh()
     st.lam.x.array[:] = 0.0
     st.u_old.x.array[:] = 0.0
-    st.u_old.x.array[2::3] = -SLIP
+    st.u_old.x.array[2::3] = -slip
     st.u_old.x.scatter_forward()
 
 
@@ -90,7 +92,9 @@ def _anchor_z(contact) -> np.ndarray:
     return contact.state.local_values(contact.state.u_old)[:, 2]
 
 
-def test_a_friction_law_changes_residual_anchor_and_outputs_together(tube):
+def test_a_friction_law_changes_residual_and_outputs_together(tube):
+    """Stick (s = 1 µm): the reaction and the residual follow the law in use; both laws keep
+    their anchor (each carries its traction at the slip it has)."""
     model, contact = tube
     area = contact.state.mesh.comm.allreduce(
         dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * contact.state.dx)), op=MPI.SUM
@@ -102,12 +106,42 @@ def test_a_friction_law_changes_residual_anchor_and_outputs_together(tube):
     try:
         for law, share in ((laws.coulomb_return_map, 1.0), (_half_stiffness, 0.5)):
             contact.friction = replace(default, law=law)  # the one change
-            _slip_everywhere(contact)
+            _slip_everywhere(contact, SLIP)
             expected = -share * kappa_t * SLIP * area
             assert contact.reaction((0.0, 0.0, 1.0)) == pytest.approx(expected, rel=1e-9)
             assert _residual_along(model, e) == pytest.approx(-expected, rel=1e-9)
             contact.accept_step()
-            assert np.allclose(_anchor_z(contact), -share * SLIP, rtol=1e-9, atol=0.0)
+            assert np.allclose(_anchor_z(contact), -SLIP, rtol=1e-9, atol=0.0)
+    finally:
+        contact.friction = default
+
+
+def _half_coefficient(slip, t_n, mu, kappa_t):
+    """The return map with half the friction coefficient."""
+    return laws.coulomb_return_map(slip, t_n, 0.5 * mu, kappa_t)
+
+
+def test_a_friction_law_changes_the_stick_slip_update(tube):
+    """Slip (s = 1 cm ≫ μ t_N/κ_T): every point slides on the cone, carrying μ t_N per area with
+    t_N = κ(−g) (the refreshed gap g < 0, per point), so the reaction is −μ Σ κ(−g) w dA and the
+    anchor keeps the elastic slip μ t_N/κ_T = μ(−g) (κ_T = κ): u_old = −μ(−g) e_z. With half
+    the coefficient, half of both."""
+    _, contact = tube
+    st = contact.state
+    mu = float(contact.friction.mu.value)
+    default = contact.friction
+    try:
+        for law, share in ((laws.coulomb_return_map, 1.0), (_half_coefficient, 0.5)):
+            contact.friction = replace(default, law=law)  # the one change
+            _slip_everywhere(contact, 1e-2)
+            depth = -st.local_values(st.gap)
+            kappa = float(contact.kappa.value)
+            areas = cpressure.point_areas(st, ufl.as_ufl(1.0))
+            normal = st.mesh.comm.allreduce(float((kappa * depth * areas).sum()), op=MPI.SUM)
+            reaction = contact.reaction((0.0, 0.0, 1.0))
+            assert reaction == pytest.approx(-share * mu * normal, rel=1e-6)
+            contact.accept_step()
+            assert np.allclose(_anchor_z(contact), -share * mu * depth, rtol=1e-6, atol=0.0)
     finally:
         contact.friction = default
 

@@ -17,13 +17,12 @@ Inputs, per unit *reference* area of the garment at the contact points:
   friction coefficient μ and the stick penalty κ_T [Pa/m]; returns the tangential traction on
   the garment [Pa] (a 3-vector, opposing the slip).
 
-The anchor update derived from a friction law keeps the slip the stick penalty needs to carry
-the traction, Δu_T(new anchor) = −t_T/κ_T, i.e. u_anchor ← u + t_T/κ_T: for the Coulomb return
-map that is exactly its elastic slip (a sticking point keeps its traction, a slipping one stays
-on the cone); for any law it is the slip whose stick-penalty force equals the traction carried.
-A law with no elastic range carries slightly less at that slip, so a sustained load creeps a
-little each accepted step: for t_T = −μ t_N tanh(κ_T|Δu_T|/(μ t_N)) Δu_T/|Δu_T| under a traction
-τ, by (μ t_N/κ_T)(artanh x − x) ≈ τ x²/(3κ_T), x = τ/(μ t_N).
+The anchor update derived from a friction law keeps the traction: after a converged step the
+anchor moves so that the slip left is the one at which the law carries the traction it carries
+now (``ContactState.elastic_slip``, found by evaluating the law). For the Coulomb return map
+that is its elastic slip (a sticking point keeps its anchor and its traction, a slipping one
+stays on the cone); for a law with no elastic range, such as a tanh regularisation, it is the
+law's inverse at the traction, so a sustained load does not creep from step to step.
 """
 
 from __future__ import annotations

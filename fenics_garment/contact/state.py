@@ -44,6 +44,9 @@ F64 = npt.NDArray[np.float64]
 
 #: Points up to this much [m] outside the traction's reach get the smooth body's Hessian too.
 HESSIAN_MARGIN = 1e-4
+#: Passes of the anchor's fixed point (:meth:`ContactState.elastic_slip`) and the traction [Pa]
+#: below which a point carries none (its elastic slip is then 0).
+ANCHOR_ITERATIONS, TRACTION_FLOOR = 6, 1e-12
 #: Points that penetrate deeper than this [m] get no Hessian term: right after a dressing step
 #: (millimetres of new penetration, t_N = κ × depth) its −t_N H, a negative stiffness over convex
 #: parts, made Newton diverge (SNES −9 on 5 of 19 cotton-gilet steps); converged penetrations are
@@ -244,10 +247,10 @@ class ContactState:
         """Mark the current state as converged: the friction slip restarts from here.
 
         With friction (``self.friction``, set by :func:`fenics_garment.contact.shell.attach`) the
-        anchor moves to u_old ← u_k + t_T/κ_T, with t_T the friction law evaluated at the
-        refreshed state (:meth:`refreshed_friction`; :mod:`fenics_garment.contact.laws`): for the
-        Coulomb return map the anchor moves by the plastic part of the slip only, so a point that
-        sticks keeps its anchor and the tangential traction it carries (e.g. holding a garment
+        anchor moves to u_old ← u_k − e, with e the slip at which the friction law carries the
+        traction it carries now (:meth:`elastic_slip`; :mod:`fenics_garment.contact.laws`): for
+        the Coulomb return map the anchor moves by the plastic part of the slip only, so a point
+        that sticks keeps its anchor and the tangential traction it carries (e.g. holding a garment
         up against gravity) is carried on into the next step instead of restarting from zero —
         restarting let a sustained tangential load creep by μ t_N / κ_T every step. A point that
         slips keeps the elastic slip μ t_N / κ_T, so its traction stays on the Coulomb cone.
@@ -261,8 +264,32 @@ class ContactState:
         if self.friction is None:
             self.u_old.x.array[:] = self.u_k.x.array
             return
-        anchor = self.u_k + self.refreshed_friction() / self.friction.kappa_t
-        self.assign(self.u_old, anchor)
+        elastic = self.elastic_slip()
+        self.assign(self.u_old, self.u_k - elastic)
+
+    def elastic_slip(self, iterations: int = ANCHOR_ITERATIONS) -> dolfinx.fem.Function:
+        """The slip e (a point Function) at which the friction law carries the traction t_T it
+        carries now: law(e) = t_T, along the current slip (:meth:`refreshed_friction`).
+
+        Found by evaluating the law, never by restating it: e₀ = −t_T/κ_T (the stick penalty's
+        slip), then e ← e |t_T| / |law(e)|, a fixed point of the law's secant. For the Coulomb
+        return map e₀ is already exact (its elastic slip, μ t_N/κ_T on the cone); for a law with
+        no elastic range (e.g. a tanh regularisation, |law(e)| concave in |e|) the iteration
+        contracts by 1 − |e| |law|'/|law| per pass (≈ ⅔ (|t_T|/μ t_N)²), so a sustained load
+        keeps its traction across accepted steps instead of creeping.
+        """
+        f = self.friction
+        target = dolfinx.fem.Function(self.Qv)
+        self.assign(target, self.refreshed_friction())
+        e = dolfinx.fem.Function(self.Qv)
+        self.assign(e, -target / f.kappa_t)
+        t_n = self.refreshed_traction()
+        size = ufl.sqrt(ufl.dot(target, target))
+        for _ in range(iterations):
+            t = f.law(e, t_n, f.mu, f.kappa_t)
+            scale = size / ufl.max_value(ufl.sqrt(ufl.dot(t, t)), TRACTION_FLOOR)
+            self.assign(e, e * scale)
+        return e
 
     # -- the laws at the refreshed points (no linearisation: u = u_k) ---------------------------
     def refreshed_traction(self, kappa: ufl.core.expr.Expr | None = None) -> ufl.core.expr.Expr:
