@@ -17,7 +17,7 @@
 # 3. an elastic foundation added as an energy, against Laplace plus the foundation's force.
 #
 # ```
-# python demos/variants.py        # ~1–3 min per variant warm; the first run compiles its forms
+# python demos/variants.py   # four tube runs, ~25 s each with a warm JIT cache (cold: minutes)
 # ```
 
 # +
@@ -249,7 +249,7 @@ garment_area = comm.allreduce(
 )  # the reference area ∫ dA at the contact points
 weight = model.stiffness.mass_per_area * 9.80665 * garment_area
 assert abs(applied[2] / -weight - 1) < 1e-6, (applied, weight)
-assert abs(reaction[2] / weight - 1) < 1e-3, (reaction, weight)
+assert abs(reaction[2] / weight - 1) < 1e-4, (reaction, weight)  # measured 4e-7
 assert fric.summary["terms"]["friction_law"].endswith("tanh_friction")
 say(f"{'':<28} weight {weight:.4f} N, body reaction {reaction[2]:.4f} N")
 # -
