@@ -1,6 +1,6 @@
 """Contact benchmark: the Laplace sleeve on the shell over a mesh sequence, and the search share.
 
-* ``laplace-sleeve``: the tight tube of :func:`fenics_garment.contact.scenes.tight_tube` (one
+* ``laplace-sleeve``: the tight tube of :func:`fenics_garment.verification.contact.tight_tube` (one
   eighth with symmetry planes, P2⊕bubble Naghdi shell, "lumped" contact rule), dressed with the
   penalty (κ̂ = 10, variant ``penalty``) and tightened by augmented-Lagrangian updates to 1 % of h
   (``augmented-lagrangian``); on the coarsest mesh also the other contact rules (``rule-…``).
@@ -21,16 +21,17 @@ import time
 from pathlib import Path
 
 from fenics_garment._stack import MPI
-from fenics_garment.contact import scenes, uzawa
+from fenics_garment.contact import uzawa
 from fenics_garment.materials import Isotropic
+from fenics_garment.verification import contact as cases
 
 HERE = Path(__file__).resolve().parent
 MATERIAL = Isotropic(E=1.0e6, nu=0.3, thickness=1.0e-3)
 
 
-def _record(scene: scenes.Scene, variant: str, wall: float, its: int, comm) -> dict:
+def _record(scene: cases.ContactCase, variant: str, wall: float, its: int, comm) -> dict:
     st, tm = scene.state, scene.solver.timings
-    value = scenes.mid_pressure(scene)
+    value = cases.mid_pressure(scene)
     assemble = comm.allreduce(tm.residual + tm.jacobian - tm.hooks, op=MPI.MAX)
     search = comm.allreduce(st.timings.search_s, op=MPI.MAX)
     hooks = comm.allreduce(tm.hooks, op=MPI.MAX)
@@ -58,7 +59,7 @@ def _record(scene: scenes.Scene, variant: str, wall: float, its: int, comm) -> d
 def run(n: tuple[int, int], rule: str = "lumped", augmented: bool = True) -> list[dict]:
     """Penalty dressing, then (``augmented``) multiplier updates: one record each."""
     comm = MPI.COMM_WORLD
-    scene = scenes.tight_tube(comm, MATERIAL, n=n, rule=rule)
+    scene = cases.tight_tube(comm, MATERIAL, n=n, rule=rule)
     st = scene.state
     st.refresh()  # search tree and Expression warm-up outside the timings
     st.timings.search_s = st.timings.eval_s = 0.0
@@ -66,7 +67,7 @@ def run(n: tuple[int, int], rule: str = "lumped", augmented: bool = True) -> lis
     tm.residual = tm.jacobian = tm.hooks = 0.0
     comm.Barrier()
     t0 = time.perf_counter()
-    rep = scenes.dress(scene)
+    rep = cases.dress_case(scene)
     its = sum(rep.iterations)
     tag = "penalty" if rule == "lumped" else f"rule-{rule}"
     out = [_record(scene, tag, time.perf_counter() - t0, its, comm)]

@@ -7,7 +7,8 @@ contact force per unit length of a closed convex section is n_θθ ∮ κ ds = 2
 shape, so the **mean** pressure around the section is n_θθ / R_eq with R_eq = (G + π h)/(2π):
 an elliptic leg or arm is compared on its girth, not on a local radius (the pressure itself is
 higher where the section is more curved). The free-end hoop force n_θθ and the bending part are
-those of :func:`fenics_garment.contact.scenes.tube_pressure` (S_zz = 0; the naive T/R is wrong by
+those of :func:`fenics_garment.verification.contact.tube_pressure` (S_zz = 0; the naive T/R is
+wrong by
 up to 9 %, see its module doc). Neglected: the limb's axial curvature and taper (a 4° taper
 changes the normal by cos 4° = 0.998) and the axial stress friction leaves after dressing.
 
@@ -63,7 +64,7 @@ def describe_class(p_mmhg: float) -> str:
 
 def laplace_pressure(body_girth: float, ease: float, stiffness, bending: bool = True) -> float:
     """Analytic mean pressure [Pa] of a level (module doc): warp along the limb, hoop = weft."""
-    from fenics_garment.contact.scenes import tube_pressure
+    from fenics_garment.verification.contact import tube_pressure
 
     h = stiffness.thickness
     r_c = body_girth / (2 * np.pi) + h / 2

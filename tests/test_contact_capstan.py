@@ -1,10 +1,10 @@
 """Capstan (Euler–Eytelwein) on the shell: T_pulled/T_held = e^{μθ} at slip, stick below it.
 
-A ν = 0 shell strip over a rigid cylinder by θ = π/2 (contact/scenes.py ``capstan_strip``): first
-pre-tensioned without friction, then, with μ = 0.4, its end B pulled further in small steps. The
-held tail's tension must not change while the wrap sticks (ratio < e^{μθ}); once it rises, the
-whole wrap slips and the ratio is the capstan ratio (Euler 1762; Eytelwein 1808; e.g. Johnson,
-"Contact Mechanics", 1985, §7.2 for the belt-friction derivation).
+A ν = 0 shell strip over a rigid cylinder by θ = π/2 (verification/contact.py ``capstan_strip``):
+first pre-tensioned without friction, then, with μ = 0.4, its end B pulled further in small
+steps. The held tail's tension must not change while the wrap sticks (ratio < e^{μθ}); once it
+rises, the whole wrap slips and the ratio is the capstan ratio (Euler 1762; Eytelwein 1808;
+e.g. Johnson, "Contact Mechanics", 1985, §7.2 for the belt-friction derivation).
 Measured: ratio at slip 1.87472–1.87500 vs 1.87446 (+0.01 … +0.03 %), 7–11 Newton iterations
 per step.
 """
@@ -14,13 +14,13 @@ from fenics_garment._stack import MPI  # noqa: I001
 import numpy as np
 import pytest
 
-from fenics_garment.contact import scenes
+from fenics_garment.verification import contact as cases
 
 
 @pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 def test_capstan_stick_then_slip():
     mu, theta = 0.4, np.pi / 2
-    sc = scenes.capstan_strip(MPI.COMM_WORLD, mu=mu, theta=theta)
+    sc = cases.capstan_strip(MPI.COMM_WORLD, mu=mu, theta=theta)
     friction = sc.contact.friction.mu
     friction.value = 0.0
     total = 2 * sc.extra["tail"] + sc.extra["rho"] * theta
@@ -30,7 +30,7 @@ def test_capstan_stick_then_slip():
         its, reason = sc.solver.solve()
         assert reason > 0, (f, its, reason)
         sc.contact.accept_step()
-    t0, tb0 = scenes.tail_tensions(sc)
+    t0, tb0 = cases.tail_tensions(sc)
     # frictionless: one uniform tension, that of the uniaxial SVK strip at stretch 1 + d0/total
     lam = 1 + d0 / total
     assert abs(tb0 / t0 - 1) < 1e-3
@@ -44,7 +44,7 @@ def test_capstan_stick_then_slip():
         its, reason = sc.solver.solve()
         assert reason > 0, (k, its, reason)
         sc.contact.accept_step()
-        ta, tb = scenes.tail_tensions(sc)
+        ta, tb = cases.tail_tensions(sc)
         history.append((k, ta, tb, its))
     print(f"\ne^(μθ) = {limit:.5f};  step, T_held [N], T_pulled [N], ratio, Newton its")
     for k, ta, tb, its in history:

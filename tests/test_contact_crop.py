@@ -3,14 +3,14 @@
 import numpy as np
 
 from fenics_garment.contact.primitives import cylinder
-from fenics_garment.contact.search import BodySurface, reach_mask
+from fenics_garment.contact.search import SearchSurface, reach_mask
 
 R = 0.1
 
 
 def test_crop_gives_the_uncropped_answer_within_the_margin():
     v, f = cylinder(R, -0.4, 0.4, 96, 96)
-    full = BodySurface(v, f)
+    full = SearchSurface(v, f)
     rng = np.random.default_rng(3)
     # a "garment" band around the middle, 8 mm outside the surface
     th = rng.uniform(0, 2 * np.pi, 2000)
@@ -18,7 +18,7 @@ def test_crop_gives_the_uncropped_answer_within_the_margin():
     garment = np.column_stack([(R + 0.008) * np.cos(th), (R + 0.008) * np.sin(th), z])
     margin = 0.05
     keep = reach_mask(v, f, garment, margin)
-    cropped = BodySurface(v, f, keep=keep)
+    cropped = SearchSurface(v, f, keep=keep)
     assert cropped.dropped == len(f) - keep.sum() > len(f) // 2
     # query points that moved up to 2 cm from the garment, inside and outside the body
     x = garment + rng.uniform(-0.02, 0.02, garment.shape)

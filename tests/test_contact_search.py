@@ -4,22 +4,22 @@ import numpy as np
 import pytest
 
 from fenics_garment.contact.primitives import cylinder, icosphere
-from fenics_garment.contact.search import BodySurface, BroadPhase
+from fenics_garment.contact.search import BroadPhase, SearchSurface
 
 R = 0.1
 
 
 @pytest.fixture(scope="module")
-def sphere() -> BodySurface:
-    return BodySurface(*icosphere(R, 4))  # 5120 triangles, edges ≈ 7.7 mm
+def sphere() -> SearchSurface:
+    return SearchSurface(*icosphere(R, 4))  # 5120 triangles, edges ≈ 7.7 mm
 
 
 @pytest.fixture(scope="module")
-def cyl() -> BodySurface:
-    return BodySurface(*cylinder(R, -0.2, 0.2, 128, 64))
+def cyl() -> SearchSurface:
+    return SearchSurface(*cylinder(R, -0.2, 0.2, 128, 64))
 
 
-def _sagitta(body: BodySurface) -> float:
+def _sagitta(body: SearchSurface) -> float:
     # the largest gap between an inscribed facet and the circle/sphere through its vertices
     return body.max_edge**2 / (4.0 * R)
 
@@ -99,7 +99,7 @@ def test_phong_normal_is_continuous_across_edges(cyl):
 
 def test_orientation_is_fixed_for_inward_meshes():
     v, f = icosphere(R, 2)
-    body = BodySurface(v, f[:, ::-1])
+    body = SearchSurface(v, f[:, ::-1])
     assert body.closest(np.array([[0.0, 0.0, 2 * R]])).distance[0] > 0
 
 

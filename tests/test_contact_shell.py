@@ -14,12 +14,13 @@ import numpy as np
 import pytest
 from scipy.optimize import brentq
 
-from fenics_garment.contact import pressure, scenes, terms, uzawa
+from fenics_garment.contact import pressure, terms, uzawa
+from fenics_garment.verification import contact as cases
 from fenics_garment.materials import Fabric, Isotropic, fabric
 from fenics_garment.solve import convergence_rates
 
 ISO = Isotropic(E=1.0e6, nu=0.3, thickness=1.0e-3)
-ORTHO = Fabric(**scenes.ORTHO)
+ORTHO = Fabric(**cases.ORTHO)
 NYLON = fabric("nylon")  # A11/A22 = 0.885: the isotropic shortcut 2(A11 + A12)E/R is +4.9 % off
 H = 1.0e-3
 
@@ -28,9 +29,9 @@ def _fmt(v):
     return [f"{x:.1e}" for x in v]
 
 
-def dress_and_tighten(scene: scenes.Scene):
+def dress_and_tighten(scene: cases.ContactCase):
     """Dress with the penalty (κ̂ = 10), then augmented-Lagrangian updates to 1 % of h."""
-    rep = scenes.dress(scene)
+    rep = cases.dress_case(scene)
     al = uzawa.augmented_lagrangian(
         scene.state, float(scene.contact.kappa.value), scene.solver.solve, tol=0.01 * H
     )
@@ -44,9 +45,9 @@ def dress_and_tighten(scene: scenes.Scene):
     ids=["isotropic", "warp-axial", "warp-hoop"],
 )
 def test_laplace_tube_on_the_shell(material, warp):
-    scene = scenes.tight_tube(MPI.COMM_WORLD, material, warp=warp)
+    scene = cases.tight_tube(MPI.COMM_WORLD, material, warp=warp)
     rep, al = dress_and_tighten(scene)
-    p, ref = scenes.mid_pressure(scene), scene.reference
+    p, ref = cases.mid_pressure(scene), scene.reference
     p_b = ref - scene.extra["membrane_only"]
     print(
         f"\n{warp}: p = {p:.3f} Pa, Laplace (free ends) {ref:.3f} Pa (bending part "
@@ -62,7 +63,7 @@ def test_pressure_on_the_body():
     """Garment pressure onto the body: the force-conserving push keeps the total force to
     round-off; the pulled map equals Laplace's pressure away from the tube's edges."""
     L = 0.1
-    scene = scenes.tight_tube(MPI.COMM_WORLD, ISO, n_body_z=16)  # body vertices every L/8 in z
+    scene = cases.tight_tube(MPI.COMM_WORLD, ISO, n_body_z=16)  # body vertices every L/8 in z
     dress_and_tighten(scene)
     st, t_n = scene.state, scene.contact.traction
     v, t = st.body.vertices, st.body.triangles
@@ -85,7 +86,7 @@ def test_pressure_on_the_body():
 
 
 def test_newton_is_quadratic_and_augmented_lagrangian_penetration():
-    scene = scenes.tight_tube(MPI.COMM_WORLD, ISO)
+    scene = cases.tight_tube(MPI.COMM_WORLD, ISO)
     rep, al = dress_and_tighten(scene)
     for r in rep.residuals:
         rates = convergence_rates(r)
@@ -105,12 +106,12 @@ def test_newton_is_quadratic_and_augmented_lagrangian_penetration():
 
 @pytest.mark.parametrize("material", [ISO, NYLON], ids=["isotropic", "nylon"])
 def test_spherical_cap_equal_biaxial(material):
-    scene = scenes.tight_cap(MPI.COMM_WORLD, material)
+    scene = cases.tight_cap(MPI.COMM_WORLD, material)
     s = scene.model.stiffness
     if material is NYLON:  # the reference must see A11 ≠ A22, else this case tests nothing new
         assert abs(s.A11 / s.A22 - 1) > 0.1
     rep, al = dress_and_tighten(scene)
-    p, ref = scenes.mid_pressure(scene), scene.reference
+    p, ref = cases.mid_pressure(scene), scene.reference
     print(
         f"\ncap: p = {p:.3f} Pa, (n1 + n2)/R {ref:.3f} Pa (bending part "
         f"{ref - scene.extra['membrane_only']:.2e} Pa), error {100 * (p / ref - 1):+.3f} %, "
@@ -120,7 +121,7 @@ def test_spherical_cap_equal_biaxial(material):
 
 
 def test_pressure_function_on_the_garment():
-    scene = scenes.tight_tube(MPI.COMM_WORLD, ISO)
+    scene = cases.tight_tube(MPI.COMM_WORLD, ISO)
     dress_and_tighten(scene)
     p = scene.contact.pressure()
     V = p.function_space
@@ -140,17 +141,17 @@ def test_pressure_function_on_the_garment():
 def test_soft_tissue_tube_on_the_shell():
     tissue = terms.SoftTissue(depth=0.01)
     k = tissue.stiffness
-    scene = scenes.tight_tube(MPI.COMM_WORLD, ISO, kappa=k)
-    scenes.dress(scene)
+    scene = cases.tight_tube(MPI.COMM_WORLD, ISO, kappa=k)
+    cases.dress_case(scene)
     s = scene.model.stiffness
     R_c = scene.R + H / 2
 
     def balance(r: float) -> float:
-        return scenes.tube_pressure(r, scene.r0, s) - k * (R_c - r)
+        return cases.tube_pressure(r, scene.r0, s) - k * (R_c - r)
 
     r = brentq(balance, scene.r0 * 1.0001, R_c)
     ref = k * (R_c - r)
-    p = scenes.mid_pressure(scene)
+    p = cases.mid_pressure(scene)
     print(
         f"\nsoft tissue k = {k:.3e} Pa/m: p = {p:.2f} Pa, reference {ref:.2f} Pa, "
         f"error {100 * (p / ref - 1):+.3f} %"
@@ -160,12 +161,12 @@ def test_soft_tissue_tube_on_the_shell():
 
 @pytest.mark.mpi
 def test_same_pressure_on_every_rank_count():
-    world = scenes.tight_tube(MPI.COMM_WORLD, ISO)
+    world = cases.tight_tube(MPI.COMM_WORLD, ISO)
     dress_and_tighten(world)
-    p_world = scenes.mid_pressure(world)
-    serial = scenes.tight_tube(MPI.COMM_SELF, ISO)
+    p_world = cases.mid_pressure(world)
+    serial = cases.tight_tube(MPI.COMM_SELF, ISO)
     dress_and_tighten(serial)
-    p_self = scenes.mid_pressure(serial)
+    p_self = cases.mid_pressure(serial)
     print(f"\n{MPI.COMM_WORLD.size} ranks: {p_world:.8f} Pa, 1 rank: {p_self:.8f} Pa")
     assert abs(p_world / p_self - 1) < 1e-8
     assert np.isfinite(p_world) and abs(p_world / world.reference - 1) < 0.01
@@ -176,11 +177,11 @@ def test_laplace_tube_p1_element_of_the_gilet_demo():
     contact pressure: cotton (seed paper Table 2) tube, measured −1.00 % on 8×4, −0.87 % on 16×8."""
     from fenics_garment.materials import fabric
 
-    scene = scenes.tight_tube(MPI.COMM_WORLD, fabric("cotton"), element="P1-P1")
+    scene = cases.tight_tube(MPI.COMM_WORLD, fabric("cotton"), element="P1-P1")
     h = scene.model.stiffness.thickness
-    scenes.dress(scene)
+    cases.dress_case(scene)
     al = uzawa.augmented_lagrangian(
         scene.state, float(scene.contact.kappa.value), scene.solver.solve, tol=0.01 * h
     )
     assert al.converged
-    assert abs(scenes.mid_pressure(scene) / scene.reference - 1) < 0.015
+    assert abs(cases.mid_pressure(scene) / scene.reference - 1) < 0.015

@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fenics_garment.contact.primitives import cylinder, icosphere
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.contact.smooth import SmoothBody
 
 R = 0.1
@@ -30,7 +30,7 @@ def _shell_points(rng, n: int, depth: float) -> tuple[np.ndarray, np.ndarray, np
 
 def _sphere_errors(sub: int) -> tuple[float, float, float, float]:
     v, t = icosphere(R, sub)
-    smooth, faceted = SmoothBody(v, t), BodySurface(v, t)
+    smooth, faceted = SmoothBody(v, t), SearchSurface(v, t)
     x, d, e = _shell_points(np.random.default_rng(sub), 2000, 0.003)
     res = smooth.closest(x)
     g = res.normal
@@ -108,7 +108,7 @@ def test_normal_is_continuous_over_a_concave_edge():
     rounded crease's curvature × 2ε), measured 10.6° at ε = 1 mm and 0.11° at ε = 10 µm."""
     angle = np.radians(20.0)
     v, t = _vee(angle)
-    faceted, smooth = BodySurface(v, t), SmoothBody(v, t)
+    faceted, smooth = SearchSurface(v, t), SmoothBody(v, t)
     jumps_f, jumps_s = [], []
     for eps in (1e-3, 1e-5):
         x = np.array([[-eps, 0.001, 0.004], [eps, 0.001, 0.004]])
@@ -198,17 +198,18 @@ def test_laplace_tube_on_the_smooth_body():
     the IMLS support is 2 × the median edge): Laplace's pressure (free ends, the same exact
     reference) to 1 %, penetration ≤ 1 % of h after the multiplier updates."""
     from fenics_garment._stack import MPI
-    from fenics_garment.contact import scenes, uzawa
+    from fenics_garment.contact import uzawa
     from fenics_garment.materials import Isotropic
+    from fenics_garment.verification import contact as cases
 
     h = 1.0e-3
-    scene = scenes.tight_tube(MPI.COMM_WORLD, Isotropic(E=1.0e6, nu=0.3, thickness=h),
+    scene = cases.tight_tube(MPI.COMM_WORLD, Isotropic(E=1.0e6, nu=0.3, thickness=h),
                               n_body=512, n_body_z=32, surface=SmoothBody)  # fmt: skip
-    rep = scenes.dress(scene)
+    rep = cases.dress_case(scene)
     al = uzawa.augmented_lagrangian(
         scene.state, float(scene.contact.kappa.value), scene.solver.solve, tol=0.01 * h
     )
-    p, ref = scenes.mid_pressure(scene), scene.reference
+    p, ref = cases.mid_pressure(scene), scene.reference
     err, pen = 100 * (p / ref - 1), al.penetration[-1] / h
     print(f"\nsmooth body: p = {p:.3f} Pa, Laplace {ref:.3f} Pa, error {err:+.3f} %; "
           f"Newton its {rep.iterations}; penetration {pen:.2%} of h")  # fmt: skip

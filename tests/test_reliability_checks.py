@@ -16,12 +16,12 @@ from test_reliability import small_tube
 
 from fenics_garment import cli
 from fenics_garment._stack import MPI
-from fenics_garment.contact.scenes import tube_pressure
 from fenics_garment.materials import fabric
 from fenics_garment.scene import build, config, preflight
 from fenics_garment.scene.dressing import DressingFailed, dress
 from fenics_garment.scene.run import run
 from fenics_garment.solve import NONFINITE_REASON, NonlinearSolver
+from fenics_garment.verification.contact import tube_pressure
 
 pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="serial")
 G = 9.80665

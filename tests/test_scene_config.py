@@ -78,3 +78,35 @@ def test_every_bundled_scene_and_the_default_use_a_verified_element():
         assert element_warning(ELEMENTS[element]) is None
     assert "WARNING" in element_warning(ELEMENTS["P1-P1"])
     assert set(config.ELEMENTS) <= set(ELEMENTS)
+
+
+@pytest.mark.parametrize(
+    "spec, words",
+    [
+        ("no_colon", "must be 'module:function'"),
+        ("mod:not-a-name", "must be 'module:function'"),
+        ("no_such_module_xyz:terms", "cannot import 'no_such_module_xyz'"),
+        ("missing.py:terms", "cannot import 'missing.py'"),
+        ("hooks.py:absent", "has no function 'absent'"),
+    ],
+)
+def test_physics_terms_errors_are_one_line(tmp_path, spec, words):
+    (tmp_path / "hooks.py").write_text("def terms(built):\n    pass\n")
+    with pytest.raises(config.SceneError) as err:
+        _load_text(tmp_path, f'[physics]\nterms = "{spec}"\n')
+    message = str(err.value)
+    assert "[physics.terms]" in message and words in message and "\n" not in message
+
+
+@pytest.mark.parametrize("spec", ["hooks.py:terms", "hooks:terms"])
+def test_physics_terms_found_next_to_the_scene(tmp_path, spec):
+    (tmp_path / "hooks.py").write_text("def terms(built):\n    built.touched = True\n")
+    s = _load_text(tmp_path, f'[physics]\nterms = "{spec}"\n')
+    hook = config.load_terms(s.physics.terms, s.source)
+
+    class Problem:
+        touched = False
+
+    problem = Problem()
+    hook(problem)
+    assert problem.touched

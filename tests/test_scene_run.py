@@ -1,7 +1,7 @@
 """A whole scene run on the cheapest garment: a tight tube dressed onto a rigid cylinder.
 
-Checked against Laplace's law for a tube with free ends (``contact.scenes.tube_pressure``), with
-the adaptive dressing forced to cut its first step, and the outputs read back.
+Checked against Laplace's law for a tube with free ends (``verification.contact.tube_pressure``),
+with the adaptive dressing forced to cut its first step, and the outputs read back.
 """
 
 import csv
@@ -15,9 +15,9 @@ import pytest
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import pressure as cpressure
-from fenics_garment.contact.scenes import tube_pressure
 from fenics_garment.scene import config
 from fenics_garment.scene.run import run
+from fenics_garment.verification.contact import tube_pressure
 
 SCENE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
 

@@ -12,9 +12,9 @@ import pytest
 from scipy.optimize import brentq
 
 from fenics_garment._stack import MPI
-from fenics_garment.contact.scenes import tube_pressure
 from fenics_garment.scene import config
 from fenics_garment.scene.build import tissue_stiffness
+from fenics_garment.verification.contact import tube_pressure
 
 SCENE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
 

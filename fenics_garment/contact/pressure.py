@@ -26,7 +26,7 @@ import numpy as np
 import numpy.typing as npt
 
 from fenics_garment._stack import MPI, dolfinx, ufl
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.contact.state import ContactState
 
 F64 = npt.NDArray[np.float64]
@@ -51,14 +51,14 @@ def garment_pressure(
     J = ufl.Jacobian(state.mesh)
     dA = ufl.sqrt(ufl.det(J.T * J))
     w = state.weights[None, :]
-    force = dolfinx.fem.Expression(t_n * dA, state.points).eval(state.mesh, state._cells) * w
-    area = dolfinx.fem.Expression(area_stretch * dA, state.points).eval(state.mesh, state._cells)
+    force = state.evaluate(t_n * dA) * w
+    area = state.evaluate(area_stretch * dA)
     area = area * w
-    if state.rule != "vertex" or state._unique is None:
+    if state.rule != "vertex" or state.shared_points is None:
         ratio = force.sum(axis=1) / area.sum(axis=1)
         return np.repeat(ratio, force.shape[1])
     force, area = force.ravel(), area.ravel()
-    inverse = state._unique[1]
+    inverse = state.shared_points[1]
     f_node = np.bincount(inverse, weights=force)
     a_node = np.bincount(inverse, weights=area)
     return (f_node / a_node)[inverse]
@@ -68,7 +68,7 @@ def point_forces(state: ContactState, t_n: ufl.core.expr.Expr) -> F64:
     """Normal contact force magnitude carried by each owned contact point [N]: t_N w |dA|."""
     J = ufl.Jacobian(state.mesh)
     dA = ufl.sqrt(ufl.det(J.T * J))
-    vals = dolfinx.fem.Expression(t_n * dA, state.points).eval(state.mesh, state._cells)
+    vals = state.evaluate(t_n * dA)
     return (vals * state.weights[None, :]).ravel()
 
 
@@ -76,21 +76,21 @@ def point_areas(state: ContactState, area_stretch: ufl.core.expr.Expr) -> F64:
     """Deformed area carried by each owned contact point [m²]: J_s w |dA|."""
     J = ufl.Jacobian(state.mesh)
     dA = ufl.sqrt(ufl.det(J.T * J))
-    vals = dolfinx.fem.Expression(area_stretch * dA, state.points).eval(state.mesh, state._cells)
+    vals = state.evaluate(area_stretch * dA)
     return (vals * state.weights[None, :]).ravel()
 
 
 def positions(state: ContactState) -> F64:
     """Current positions x = X + u of the owned contact points, (n, 3)."""
-    return state._x_expr.eval(state.mesh, state._cells).reshape(-1, 3)
+    return state.positions()
 
 
-def body_pressure(state: ContactState, t_n: ufl.core.expr.Expr, body: BodySurface) -> F64:
+def body_pressure(state: ContactState, t_n: ufl.core.expr.Expr, body: SearchSurface) -> F64:
     """Pressure on the body surface at its vertices [Pa], identical on every rank."""
     f = point_forces(state, t_n)
     active = f > 0
     res = body.closest(positions(state)[active])
-    bary = body._barycentric(res.point, res.face)
+    bary = body.barycentric(res.point, res.face)
     nodal = np.zeros(len(body.vertices))
     np.add.at(nodal, body.triangles[res.face].ravel(), (bary * f[active, None]).ravel())
     comm = state.mesh.comm
@@ -119,10 +119,10 @@ def pressure_function(
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1))
     J = ufl.Jacobian(mesh)
     dA = ufl.sqrt(ufl.det(J.T * J))
-    cells = state._cells
+    cells = state.owned_cells
     w = state.weights[None, :]
-    force = dolfinx.fem.Expression(t_n * dA, state.points).eval(mesh, cells) * w
-    area = dolfinx.fem.Expression(area_stretch * dA, state.points).eval(mesh, cells) * w
+    force = state.evaluate(t_n * dA) * w
+    area = state.evaluate(area_stretch * dA) * w
     p1 = basix.create_element(basix.ElementFamily.P, basix.CellType.triangle, 1)
     N = p1.tabulate(0, state.points)[0, :, :, 0]  # (points, 3): N_a(x_p)
     dofs = V.dofmap.list[cells]  # (cells, 3)
@@ -165,8 +165,8 @@ def body_pressure_map(
     pg = np.zeros(n_global)
     for gi, xi, pi in comm.allgather((gidx, x, p.x.array[:n_owned])):
         xg[gi], pg[gi] = xi, pi
-    garment = BodySurface(xg, np.vstack(comm.allgather(cells)))
+    garment = SearchSurface(xg, np.vstack(comm.allgather(cells)))
     res = garment.closest(np.asarray(body_vertices, dtype=np.float64))
-    bary = garment._barycentric(res.point, res.face)
+    bary = garment.barycentric(res.point, res.face)
     values = np.einsum("ij,ij->i", bary, pg[garment.triangles[res.face]])
     return np.where(np.abs(res.distance) <= reach, values, 0.0)

@@ -14,7 +14,7 @@ AABB tree) is built once per scene; each rank queries only its own garment point
   ``(x − c)/|x − c|`` off the surface (continuous outside, falls back to Phong within
   ``1e-12`` m of the surface). The distance itself is always the exact one.
 * **Crop to the garment's reach** (:func:`reach_mask`): body triangles outside the garment's
-  bounding box grown by a margin are left out of the AABB tree (``BodySurface(..., keep=)``).
+  bounding box grown by a margin are left out of the AABB tree (``SearchSurface(..., keep=)``).
   Face indices, normals and pseudonormals stay those of the whole body, so for every point whose
   distance to the body is below ``margin − (its travel out of the box)`` the answer is exactly the
   uncropped one: the triangle holding its closest point meets the grown box.
@@ -68,7 +68,7 @@ class ClosestPoints:
     hessian: F64 | None = None
 
 
-class BodySurface:
+class SearchSurface:
     """A closed (or open, consistently oriented) triangulated body surface with an AABB tree.
 
     Args:
@@ -102,7 +102,7 @@ class BodySurface:
         else:
             self._face_ids = np.flatnonzero(np.asarray(keep, dtype=bool)).astype(np.int64)
             if len(self._face_ids) == 0:
-                raise ValueError("BodySurface: the crop keeps no triangle of the body")
+                raise ValueError("SearchSurface: the crop keeps no triangle of the body")
         self._searched = np.ascontiguousarray(f[self._face_ids])
         self.dropped = len(f) - len(self._face_ids)
         self._tree = igl.AABB()
@@ -177,6 +177,10 @@ class BodySurface:
             raise ValueError(f"normal must be 'phong', 'gradient' or 'face', not {normal!r}")
         return ClosestPoints(signed, c, face, n)
 
+    def barycentric(self, c: F64, face: I64) -> F64:
+        """Barycentric coordinates (n, 3) of the points ``c`` in their triangles ``face``."""
+        return self._barycentric(c, face)
+
     def _barycentric(self, c: F64, face: I64) -> F64:
         v = self.vertices[self.triangles[face]]  # (n, 3, 3)
         e1, e2, r = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0], c - v[:, 0]
@@ -241,7 +245,7 @@ class BroadPhase:
     _n0: F64 | None = field(default=None, repr=False)
 
     def query(
-        self, body: BodySurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
+        self, body: SearchSurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
     ) -> tuple[F64, F64, F64 | None]:
         """Signed distance, normal and (smooth body) Hessian of every point of ``x``, searching
         only the candidates; a skipped point keeps its last normal and gets a zero Hessian."""
@@ -268,3 +272,15 @@ class BroadPhase:
             self._n0[near] = res.normal
         self.skipped_fraction = float(1.0 - near.sum() / n) if n else 0.0
         return d, nrm, hess
+
+    def memory(self) -> dict[str, F64]:
+        """The last exact search: points ``x0``, distances ``d0`` and normals ``n0`` (empty
+        before the first query)."""
+        if self._x0 is None:
+            return {}
+        return {"x0": self._x0, "d0": self._d0, "n0": self._n0}
+
+    def restore(self, memory: dict[str, F64]) -> None:
+        """Put back a :meth:`memory` (copies)."""
+        if memory:
+            self._x0, self._d0, self._n0 = (memory[k].copy() for k in ("x0", "d0", "n0"))

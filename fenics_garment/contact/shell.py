@@ -2,7 +2,8 @@
 
 :func:`attach` builds the state on ``model.u`` (the displacement part of the mixed unknown), adds
 the contact virtual work R_c(v) = −∫ t_N n·v_u dA (at the contact points) to the model's residual
-and returns a :class:`ShellContact` whose ``refresh`` is the pre-residual hook of
+(as a builder: made from the contact's laws when the residual is) and returns a
+:class:`ShellContact` whose ``refresh`` is the pre-residual hook of
 :class:`fenics_garment.solve.NonlinearSolver`::
 
     contact = attach(model, body, kappa_hat=10.0)
@@ -23,8 +24,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fenics_garment._stack import MPI, dolfinx, ufl
-from fenics_garment.contact import pressure, terms
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact import laws, pressure, terms
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.contact.state import ContactState
 
 
@@ -36,12 +37,35 @@ def area_stretch(kin) -> ufl.core.expr.Expr:
 
 @dataclass
 class ShellContact:
-    """Normal contact of a shell with a body: state, penalty and the traction expression."""
+    """Contact of a shell with a body: the state, the penalty and the contact laws.
+
+    The laws are values (:mod:`fenics_garment.contact.laws`): ``normal_law`` (g, λ, κ) -> t_N
+    and ``friction.law`` (Δu_T, t_N, μ, κ_T) -> t_T. Set them before the solver is built
+    (the model's residual is assembled from them then): the residual, the stick/slip anchor
+    update, the multiplier update, the reaction and the pressure outputs all follow.
+    """
 
     model: object
     state: ContactState
     kappa: dolfinx.fem.Constant
-    friction: terms.Friction | None = None
+
+    @property
+    def normal_law(self) -> laws.NormalLaw:
+        """The normal contact law (kept on the state, whose point updates evaluate it)."""
+        return self.state.normal_law
+
+    @normal_law.setter
+    def normal_law(self, law: laws.NormalLaw) -> None:
+        self.state.normal_law = law
+
+    @property
+    def friction(self) -> terms.Friction | None:
+        """Coulomb friction (μ, κ_T and its law), or None: frictionless."""
+        return self.state.friction
+
+    @friction.setter
+    def friction(self, friction: terms.Friction | None) -> None:
+        self.state.friction = friction
 
     def refresh(self) -> None:
         """Pre-residual hook: gap, normal and u_k at the current iterate."""
@@ -51,9 +75,13 @@ class ShellContact:
         """After a converged load step: friction's anchor moves by the plastic slip only."""
         self.state.accept_step()
 
+    def residual(self, v: ufl.core.expr.Expr) -> ufl.Form:
+        """R_c(v) of the laws in use (:func:`terms.contact_residual`) on the test field v."""
+        return terms.contact_residual(self.state, v, self.kappa, self.friction)
+
     @property
     def traction(self) -> ufl.core.expr.Expr:
-        """t_N = ⟨λ − κ g⟩₊ per reference area [Pa]."""
+        """t_N of the normal law in use, per reference area [Pa]."""
         return terms.normal_traction(self.state, self.kappa)
 
     def area_stretch(self) -> ufl.core.expr.Expr:
@@ -70,7 +98,7 @@ class ShellContact:
         At equilibrium with no other support it balances the garment's weight — a conservation
         check that a regularising spring carries none of it."""
         e = ufl.as_vector([float(d) for d in direction])
-        form = dolfinx.fem.form(-terms.contact_residual(self.state, e, self.kappa, self.friction))
+        form = dolfinx.fem.form(-self.residual(e))
         comm = self.state.mesh.comm
         return comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
 
@@ -81,7 +109,7 @@ class ShellContact:
 
 def attach(
     model,
-    body: BodySurface,
+    body: SearchSurface,
     *,
     kappa: float | None = None,
     kappa_hat: float = 10.0,
@@ -116,7 +144,8 @@ def attach(
     if mu is not None:
         kt = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa * stick_ratio))
         friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), kt)
-    v_u = ufl.split(ufl.TestFunction(model.Q))[0]
-    model.add_residual(terms.contact_residual(state, v_u, k, friction))
-    state.friction, state.kappa = friction, k  # for the friction return map in accept_step
-    return ShellContact(model, state, k, friction)
+    state.friction, state.kappa = friction, k  # the point updates evaluate the laws with them
+    contact = ShellContact(model, state, k)
+    # added as a builder: the residual is made from the laws in use when the solver is built
+    model.add_residual(lambda: contact.residual(ufl.split(ufl.TestFunction(model.Q))[0]))
+    return contact

@@ -26,7 +26,7 @@ contact terms as the consistent linearisation (``ContactState``). It is exact on
 body sampled by the mesh (tests/test_contact_smooth.py: sphere and cylinder, rate ≈ 2).
 
 Away from the band (``|d_faceted| > band_factor · r``, or no vertex within reach) the exact
-faceted signed distance of :class:`BodySurface` is used: no contact is active there, and its
+faceted signed distance of :class:`SearchSurface` is used: no contact is active there, and its
 pseudonormal sign stays the robust inside/outside test.
 """
 
@@ -37,7 +37,7 @@ import numpy.typing as npt
 from scipy.sparse import csr_matrix
 from scipy.spatial import cKDTree
 
-from fenics_garment.contact.search import BodySurface, ClosestPoints
+from fenics_garment.contact.search import ClosestPoints, SearchSurface
 
 F64 = npt.NDArray[np.float64]
 
@@ -203,11 +203,11 @@ def _imls(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float,
     return f, grad, hess, wsum
 
 
-class SmoothBody(BodySurface):
-    """A :class:`BodySurface` whose distance and normal are the C² IMLS function (module doc).
+class SmoothBody(SearchSurface):
+    """A :class:`SearchSurface` whose distance and normal are the C² IMLS function (module doc).
 
     Args:
-        vertices, triangles, keep: as for :class:`BodySurface` (the crop keeps the vertices of
+        vertices, triangles, keep: as for :class:`SearchSurface` (the crop keeps the vertices of
             the kept triangles in the smooth representation).
         support: support radius r / the median longest one-ring edge.
         band_factor: the smooth distance is used for |d_faceted| ≤ band_factor · r.

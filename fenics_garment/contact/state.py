@@ -37,12 +37,16 @@ import numpy as np
 import numpy.typing as npt
 
 from fenics_garment._stack import dolfinx, ufl
-from fenics_garment.contact.search import BodySurface, BroadPhase
+from fenics_garment.contact import laws
+from fenics_garment.contact.search import BroadPhase, SearchSurface
 
 F64 = npt.NDArray[np.float64]
 
 #: Points up to this much [m] outside the traction's reach get the smooth body's Hessian too.
 HESSIAN_MARGIN = 1e-4
+#: Passes of the anchor's fixed point (:meth:`ContactState.elastic_slip`) and the traction [Pa]
+#: below which a point carries none (its elastic slip is then 0).
+ANCHOR_ITERATIONS, TRACTION_FLOOR = 6, 1e-12
 #: Points that penetrate deeper than this [m] get no Hessian term: right after a dressing step
 #: (millimetres of new penetration, t_N = κ × depth) its −t_N H, a negative stiffness over convex
 #: parts, made Newton diverge (SNES −9 on 5 of 19 cotton-gilet steps); converged penetrations are
@@ -80,7 +84,7 @@ def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
 
 
 @dataclass
-class Timings:
+class SearchTimings:
     """Accumulated wall time [s] and call counts of the refresh."""
 
     search_s: float = 0.0
@@ -112,7 +116,7 @@ class ContactState:
         self,
         mesh: dolfinx.mesh.Mesh,
         u: ufl.core.expr.Expr,
-        body: BodySurface,
+        body: SearchSurface,
         *,
         offset: float,
         rule: str = "vertex",
@@ -165,10 +169,12 @@ class ContactState:
                 centre = len(mesh.geometry.x) + self._cells[:, None]
                 nodes = np.hstack([nodes, centre])
             self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
-        self.timings = Timings()
+        self.timings = SearchTimings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
         self.kappa: dolfinx.fem.Constant | None = None  # normal penalty (friction's t_N)
+        self.normal_law: laws.NormalLaw = laws.augmented_lagrangian  # (g, λ, κ) -> t_N
+        self._compiled: dict[tuple, dolfinx.fem.Expression] = {}  # see evaluate()
 
     # -- the pre-residual hook ------------------------------------------------------------------
     def refresh(self, _: dolfinx.fem.Function | None = None) -> None:
@@ -241,32 +247,117 @@ class ContactState:
         """Mark the current state as converged: the friction slip restarts from here.
 
         With friction (``self.friction``, set by :func:`fenics_garment.contact.shell.attach`) the
-        anchor u_old moves by the plastic part of the slip only (return mapping): a point that
-        sticks keeps its anchor, so the tangential traction it carries (e.g. holding a garment
+        anchor moves to u_old ← u_k − e, with e the slip at which the friction law carries the
+        traction it carries now (:meth:`elastic_slip`; :mod:`fenics_garment.contact.laws`): for
+        the Coulomb return map the anchor moves by the plastic part of the slip only, so a point
+        that sticks keeps its anchor and the tangential traction it carries (e.g. holding a garment
         up against gravity) is carried on into the next step instead of restarting from zero —
         restarting let a sustained tangential load creep by μ t_N / κ_T every step. A point that
         slips keeps the elastic slip μ t_N / κ_T, so its traction stays on the Coulomb cone.
 
-        The normal part of the step always moves the anchor (u_old = u_k − elastic slip): the
-        anchor is a point on the skin. Left behind, the normal motion accumulated over the
-        dressing (2.5 mm median on the sleeve, against an elastic slip μ t_N / κ_T ≈ 0.01 mm)
-        turned into tangential "slip" (I − n⊗n)(u − u_old) wherever the faceted body's normal
-        turned by a fraction of a degree, and Newton cycled between stick and slip.
+        The normal part of the step always moves the anchor (t_T is tangential): the anchor is
+        a point on the skin. Left behind, the normal motion accumulated over the dressing
+        (2.5 mm median on the sleeve, against an elastic slip μ t_N / κ_T ≈ 0.01 mm) turned
+        into tangential "slip" (I − n⊗n)(u − u_old) wherever the faceted body's normal turned by
+        a fraction of a degree, and Newton cycled between stick and slip.
         """
         if self.friction is None:
             self.u_old.x.array[:] = self.u_k.x.array
             return
-        mu = float(self.friction.mu.value)
-        kappa_t = float(self.friction.kappa_t.value)
-        du = (self.u_k.x.array - self.u_old.x.array).reshape(-1, 3)
-        n = self.normal_fn.x.array.reshape(-1, 3)
-        du_t = du - np.sum(du * n, axis=1)[:, None] * n
-        # t_N at u = u_k, where the linearised gap is the refreshed gap
-        kappa_n = float(self.kappa.value) if self.kappa is not None else kappa_t
-        t_n = np.maximum(self.lam.x.array - kappa_n * self.gap.x.array, 0.0)
-        trial = kappa_t * np.linalg.norm(du_t, axis=1)
-        scale = np.where(trial <= mu * t_n, 1.0, mu * t_n / np.maximum(trial, 1e-300))
-        self.u_old.x.array[:] = self.u_k.x.array - (scale[:, None] * du_t).ravel()
+        elastic = self.elastic_slip()
+        self.assign(self.u_old, self.u_k - elastic)
+
+    def elastic_slip(self, iterations: int = ANCHOR_ITERATIONS) -> dolfinx.fem.Function:
+        """The slip e (a point Function) at which the friction law carries the traction t_T it
+        carries now: law(e) = t_T, along the current slip (:meth:`refreshed_friction`).
+
+        Found by evaluating the law, never by restating it: e₀ = −t_T/κ_T (the stick penalty's
+        slip), then e ← e |t_T| / |law(e)|, a fixed point of the law's secant. For the Coulomb
+        return map e₀ is already exact (its elastic slip, μ t_N/κ_T on the cone); for a law with
+        no elastic range (e.g. a tanh regularisation, |law(e)| concave in |e|) the iteration
+        contracts by 1 − |e| |law|'/|law| per pass (≈ ⅔ (|t_T|/μ t_N)²), so a sustained load
+        keeps its traction across accepted steps instead of creeping.
+        """
+        f = self.friction
+        target = dolfinx.fem.Function(self.Qv)
+        self.assign(target, self.refreshed_friction())
+        e = dolfinx.fem.Function(self.Qv)
+        self.assign(e, -target / f.kappa_t)
+        t_n = self.refreshed_traction()
+        size = ufl.sqrt(ufl.dot(target, target))
+        for _ in range(iterations):
+            t = f.law(e, t_n, f.mu, f.kappa_t)
+            scale = size / ufl.max_value(ufl.sqrt(ufl.dot(t, t)), TRACTION_FLOOR)
+            self.assign(e, e * scale)
+        return e
+
+    # -- the laws at the refreshed points (no linearisation: u = u_k) ---------------------------
+    def refreshed_traction(self, kappa: ufl.core.expr.Expr | None = None) -> ufl.core.expr.Expr:
+        """t_N of ``self.normal_law`` at u = u_k, where the linearised gap is the refreshed gap
+        g_k: a UFL expression of the point Functions only (for :meth:`evaluate`)."""
+        if kappa is None:
+            kappa = self.kappa if self.kappa is not None else self.friction.kappa_t
+        return self.normal_law(self.gap, self.lam, kappa)
+
+    def refreshed_slip(self) -> ufl.core.expr.Expr:
+        """Δu_T = (I − n_k⊗n_k)(u_k − u_old) at the refreshed points."""
+        du = self.u_k - self.u_old
+        return du - ufl.dot(du, self.normal_fn) * self.normal_fn
+
+    def refreshed_friction(self) -> ufl.core.expr.Expr:
+        """t_T of ``self.friction.law`` at the refreshed points (the anchor update's traction)."""
+        f = self.friction
+        return f.law(self.refreshed_slip(), self.refreshed_traction(), f.mu, f.kappa_t)
+
+    # -- public accessors of the contact points ---------------------------------------------------
+    @property
+    def owned_cells(self) -> np.ndarray:
+        """The owned garment cells, in the order of every per-point array of this state."""
+        return self._cells
+
+    @property
+    def shared_points(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """(first, inverse) when contact points sit on geometry nodes shared by cells: the flat
+        point array indexed by ``first`` has one entry per node, and ``inverse`` maps every
+        cell-point to its node (``np.unique``); None when the points are per cell."""
+        return self._unique
+
+    def evaluate(self, expr: ufl.core.expr.Expr) -> F64:
+        """``expr`` at the owned contact points, shape (cells, points × value size).
+
+        The compiled ``fem.Expression`` is kept per UFL expression (its signature), so repeated
+        calls with the same law do not recompile."""
+        key = (expr.ufl_shape, repr(expr))
+        compiled = self._compiled.get(key)
+        if compiled is None:
+            compiled = self._compiled[key] = dolfinx.fem.Expression(expr, self.points)
+        return compiled.eval(self.mesh, self._cells)
+
+    def assign(self, f: dolfinx.fem.Function, expr: ufl.core.expr.Expr) -> None:
+        """Set the point Function ``f`` (on ``Qs`` or ``Qv``) to ``expr`` at every owned point,
+        then update the ghosts."""
+        values = self.evaluate(expr)
+        bs = f.function_space.dofmap.index_map_bs
+        if bs == 1:
+            f.x.array[self._dofs] = values.ravel()
+        else:
+            vals = values.reshape(-1, bs)
+            for k in range(bs):
+                f.x.array[bs * self._dofs + k] = vals[:, k]
+        f.x.scatter_forward()
+
+    def positions(self) -> F64:
+        """Current positions x = X + u of the owned contact points, (n, 3)."""
+        return self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
+
+    def search_memory(self) -> dict[str, np.ndarray]:
+        """The broad phase's last exact search (points, distances, normals), for a checkpoint;
+        empty before the first search."""
+        return self._broad.memory()
+
+    def restore_search_memory(self, memory: dict[str, np.ndarray]) -> None:
+        """Put back a :meth:`search_memory` (a resumed run then searches the same points)."""
+        self._broad.restore(memory)
 
     def local_values(self, f: dolfinx.fem.Function) -> F64:
         """The owned point values of a quadrature Function (scalar (n,) or vector (n, 3))."""

@@ -1,10 +1,11 @@
-"""Contact terms as UFL: each a short function with its formula, so that one can be swapped.
+"""Contact terms as UFL: the contact virtual work built from the laws of
+:mod:`fenics_garment.contact.laws` (the one definition of each law), on the state's inputs.
 
 Notation (all at the contact points, per unit *reference* area of the garment):
 
 * g = g_k + n_k·(u − u_k)   the gap linearised about the current iterate (``ContactState``),
 * ⟨a⟩₊ = max(a, 0),
-* t_N = ⟨λ − κ g⟩₊          the normal contact traction [Pa] (penalty: λ = 0),
+* t_N = law(g, λ, κ)        the normal contact traction [Pa], default ⟨λ − κ g⟩₊ (penalty: λ = 0),
 * Δu_T = (I − n⊗n)(u − u_old)  the tangential slip increment since the last converged step.
 
 Integrate the returned densities with ``state.dx`` (the contact-point rule).
@@ -15,63 +16,30 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from fenics_garment._stack import ufl
+from fenics_garment.contact.laws import FrictionLaw, coulomb_return_map
+from fenics_garment.contact.laws import macaulay as macaulay  # re-exported
 from fenics_garment.contact.state import ContactState
 
 
-def macaulay(a: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """⟨a⟩₊ = max(a, 0)."""
-    return ufl.max_value(a, 0.0)
-
-
 def normal_traction(state: ContactState, kappa: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """t_N = ⟨λ − κ g⟩₊: normal contact traction per reference area (penalty when λ = 0)."""
-    return macaulay(state.lam - kappa * state.linearised_gap())
-
-
-def augmented_lagrangian_energy(
-    state: ContactState, kappa: ufl.core.expr.Expr
-) -> ufl.core.expr.Expr:
-    """ψ_c = ⟨λ − κ g⟩₊² / (2κ)  (per reference area).
-
-    Its variation is δψ_c = −t_N n·δu with t_N = ⟨λ − κ g⟩₊; with λ = 0 it is the penalty
-    energy κ⟨−g⟩₊²/2. Uzawa (``uzawa.py``) updates λ ← t_N between solves.
-    """
-    return normal_traction(state, kappa) ** 2 / (2.0 * kappa)
-
-
-def normal_penalty_energy(state: ContactState, kappa: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
-    """ψ_c = κ ⟨−g⟩₊² / 2  (pure penalty; ignores ``state.lam``)."""
-    return 0.5 * kappa * macaulay(-state.linearised_gap()) ** 2
+    """t_N of the state's normal law (``state.normal_law``) at the linearised gap: the traction
+    per reference area the residual uses (penalty when λ = 0)."""
+    return state.normal_law(state.linearised_gap(), state.lam, kappa)
 
 
 def slip_increment(state: ContactState) -> ufl.core.expr.Expr:
-    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the last converged step (rigid body)."""
+    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the anchor u_old (rigid body)."""
     n = state.normal_fn
     du = state.u - state.u_old
     return du - ufl.dot(du, n) * n
 
 
 def friction_traction(
-    state: ContactState,
-    mu: ufl.core.expr.Expr,
-    kappa_t: ufl.core.expr.Expr,
-    t_n: ufl.core.expr.Expr,
-    eps: float = 1e-30,
+    state: ContactState, friction: Friction, t_n: ufl.core.expr.Expr
 ) -> ufl.core.expr.Expr:
-    """Regularised Coulomb traction on the garment (per reference area), return-map form.
-
-    t_T = −κ_T Δu_T                         if κ_T|Δu_T| ≤ μ t_N  (stick, elastic slip)
-    t_T = −μ t_N Δu_T / |Δu_T|             otherwise            (slip)
-
-    i.e. t_T = −κ_T Δu_T · min(1, μ t_N / (κ_T |Δu_T|)). κ_T is the tangential penalty (the
-    stick regularisation: |Δu_T| ≤ μ t_N / κ_T while sticking). Not derived from a potential:
-    the Jacobian is non-symmetric (LU/MUMPS or GMRES, not CG).
-    """
-    s = slip_increment(state)
-    norm = ufl.sqrt(ufl.dot(s, s) + eps)
-    trial = kappa_t * norm
-    scale = ufl.conditional(ufl.le(trial, mu * t_n), 1.0, mu * t_n / trial)
-    return -kappa_t * scale * s
+    """t_T of ``friction.law`` (default :func:`laws.coulomb_return_map`) at the slip of the
+    iterate, per reference area."""
+    return friction.law(slip_increment(state), t_n, friction.mu, friction.kappa_t)
 
 
 def contact_residual(
@@ -84,13 +52,14 @@ def contact_residual(
 
     R_c(v) = −∫ t_N n·v dA − ∫ t_T·v dA   (over the reference area, at the contact points)
 
-    n is ``state.contact_normal()``: the refreshed normal, plus its turning H_k δ on a smooth
-    body, so that R_c is the variation of the penalty energy of the linearised gap.
+    with t_N of ``state.normal_law`` and t_T of ``friction.law``. n is
+    ``state.contact_normal()``: the refreshed normal, plus its turning H_k δ on a smooth body,
+    so that R_c is the variation of the penalty energy of the linearised gap.
     """
     t_n = normal_traction(state, kappa)
     form = -t_n * ufl.dot(state.contact_normal(), v) * state.dx
     if friction is not None:
-        t_t = friction_traction(state, friction.mu, friction.kappa_t, t_n)
+        t_t = friction_traction(state, friction, t_n)
         form += -ufl.dot(t_t, v) * state.dx
     return form
 
@@ -102,10 +71,13 @@ class Friction:
     Attributes:
         mu: friction coefficient (UFL Constant or float), e.g. :data:`MU_SKIN_COTTON`.
         kappa_t: tangential (stick) penalty [Pa/m]; take it equal to the normal penalty.
+        law: the friction law (Δu_T, t_N, μ, κ_T) -> t_T (:mod:`fenics_garment.contact.laws`);
+            the residual, the stick/slip anchor update and the reaction all use it.
     """
 
     mu: ufl.core.expr.Expr
     kappa_t: ufl.core.expr.Expr
+    law: FrictionLaw = coulomb_return_map
 
 
 #: Skin–cotton friction coefficient used as the default, 0.4: a dry-skin value at the low end of the

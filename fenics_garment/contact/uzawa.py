@@ -18,12 +18,13 @@ went 188 → 169 → 74 → 112 → 116 → 114 µm at fixed κ.
 
 from __future__ import annotations
 
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from fenics_garment._stack import MPI
+from fenics_garment._stack import MPI, dolfinx
 from fenics_garment.contact.state import ContactState
 
 
@@ -55,8 +56,9 @@ MAX_CONTRACTION = 0.9
 def update_multiplier(
     state: ContactState, kappa: float, previous_gap: np.ndarray | None = None
 ) -> None:
-    """λ ← ⟨λ − κ g / (1 − ρ)⟩₊ at every contact point (g from the last refresh = the converged
-    state), with ρ = g/g_prev the point's observed contraction (0 on the first update).
+    """λ ← t_N(g, λ, κ / (1 − ρ)) at every contact point, with t_N the state's normal law
+    (``state.normal_law``, default ⟨λ − κ g⟩₊) at the refreshed gap g (the converged state) and
+    ρ = g/g_prev the point's observed contraction (0 on the first update).
 
     ρ = 0 is the plain Uzawa step. Where a point's penetration falls only slowly from one update
     to the next — the structure around it is much stiffer than the penalty that point carries,
@@ -65,7 +67,8 @@ def update_multiplier(
     on a spring K with the penalty κ', g_{k+1} = ρ g_k with ρ = K/(K + κ'), and the step
     κ' g_k/(1 − ρ) = (K + κ') g_k lands on g = 0 (Aitken's Δ² extrapolation of the multiplier
     sequence). ρ is used only where the point penetrated both times and less now, and is capped
-    at :data:`MAX_CONTRACTION`.
+    at :data:`MAX_CONTRACTION`. The law is evaluated, not restated: the extrapolated penalty
+    κ/(1 − ρ) is a point Function passed to it as its κ.
     """
     g = state.gap.x.array
     gain = np.ones_like(g)
@@ -74,9 +77,23 @@ def update_multiplier(
         rho = np.zeros_like(g)
         rho[both] = np.minimum(g[both] / previous_gap[both], MAX_CONTRACTION)
         gain = 1.0 / (1.0 - rho)
-    lam = state.lam.x.array
-    lam[:] = np.maximum(0.0, lam - kappa * gain * g)
+    step = _point_penalty(state)
+    step.x.array[:] = kappa * gain
+    new = dolfinx.fem.Function(state.Qs)
+    state.assign(new, state.refreshed_traction(step))
+    state.lam.x.array[:] = new.x.array
     state.lam.x.scatter_forward()
+
+
+#: The extrapolated-penalty point Function of each state (made once: one compiled law).
+_PENALTIES: weakref.WeakKeyDictionary = weakref.WeakKeyDictionary()
+
+
+def _point_penalty(state: ContactState) -> dolfinx.fem.Function:
+    """The point Function of κ/(1 − ρ) for ``state``."""
+    if state not in _PENALTIES:
+        _PENALTIES[state] = dolfinx.fem.Function(state.Qs, name="uzawa_penalty")
+    return _PENALTIES[state]
 
 
 def augmented_lagrangian(

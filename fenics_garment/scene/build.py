@@ -131,14 +131,20 @@ def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
 
 @dataclass
 class Built:
-    """Everything a dressing run needs."""
+    """The scene's problem, as plain values: everything a dressing run needs.
+
+    Edit it between :func:`build` and the solve (``scene.run``'s ``terms`` hook): the shell's
+    energy laws are ``model.membrane`` etc., further terms go through ``model.add_energy`` /
+    ``model.add_residual``, the contact laws are ``contact.normal_law`` and
+    ``contact.friction.law``; :meth:`terms` lists what is in use.
+    """
 
     scene: Scene
     body: BodySurface
     garment: gm.GarmentSurface
     model: ShellModel
     contact: shell_contact.ShellContact
-    search_body: search.BodySurface
+    search_body: search.SearchSurface
     regularisation: Regularisation
     bcs: list
     mu: dolfinx.fem.Constant | None
@@ -148,6 +154,26 @@ class Built:
     def dofs(self) -> int:
         im = self.model.Q.dofmap.index_map
         return im.size_global * self.model.Q.dofmap.index_map_bs
+
+    def terms(self) -> dict:
+        """The laws and terms in use, by name (recorded in ``summary.json``)."""
+        m, c = self.model, self.contact
+        return {
+            **{k: _name(getattr(m, k)) for k in ("membrane", "bending", "shear", "drilling")},
+            "added_energies": [_name(d) for d, _ in m.added_energies],
+            "added_residuals": len(m.added_residuals),  # contact, regularisation, user terms
+            "loads": {k: len(v) for k, v in m.loads.items()},
+            "normal_law": _name(c.normal_law),
+            "friction_law": _name(c.friction.law) if c.friction is not None else None,
+            "constraints": len(self.bcs),
+        }
+
+
+def _name(term) -> str:
+    """``module.function`` of a law (``expression`` for a UFL density)."""
+    if isinstance(term, ufl.core.expr.Expr):  # (UFL expressions are callable too)
+        return "expression"
+    return f"{getattr(term, '__module__', '?')}.{getattr(term, '__qualname__', repr(term))}"
 
 
 def outward_from_axis(body: BodySurface):
@@ -175,7 +201,7 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     p = scene.physics
     gravity = model.add_gravity() if p.gravity else None
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
-    surface = SmoothBody if p.body_surface == "smooth" else search.BodySurface
+    surface = SmoothBody if p.body_surface == "smooth" else search.SearchSurface
     sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
     contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
                                    kappa_hat=p.kappa_hat, rule=_rule(model),

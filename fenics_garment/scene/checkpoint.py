@@ -63,10 +63,7 @@ def _arrays(built) -> dict[str, np.ndarray]:
         "lam": st.lam.x.array,
         "u_old": st.u_old.x.array,
     }
-    bp = st._broad
-    if bp._x0 is not None:
-        arrays |= {"x0": bp._x0, "d0": bp._d0, "n0": bp._n0}
-    return arrays
+    return arrays | st.search_memory()
 
 
 def _rank_file(folder: Path, k: int, rank: int) -> Path:
@@ -255,7 +252,6 @@ def restore(built, run_folder: Path, meta: dict) -> Progress:
     for name, target in targets.items():
         if name not in ("x0", "d0", "n0"):
             target[:] = saved[name]
-    bp = built.contact.state._broad
     if "x0" in saved:
-        bp._x0, bp._d0, bp._n0 = saved["x0"].copy(), saved["d0"].copy(), saved["n0"].copy()
+        built.contact.state.restore_search_memory({k: saved[k] for k in ("x0", "d0", "n0")})
     return Progress.from_dict(meta["progress"])

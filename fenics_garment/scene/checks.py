@@ -30,7 +30,6 @@ import numpy as np
 
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
-from fenics_garment.contact import terms
 
 #: The bound of each check (see the module doc).
 LIMITS = {"penetration": 1.0, "spring": 0.01, "force_balance": 0.02, "contact_area": 0.5}
@@ -82,7 +81,7 @@ def forces(built) -> tuple[np.ndarray, np.ndarray]:
     model, c = built.model, built.contact
     mesh = model.geometry.mesh
     e = dolfinx.fem.Constant(mesh, np.zeros(3))
-    reaction = dolfinx.fem.form(-terms.contact_residual(c.state, e, c.kappa, c.friction))
+    reaction = dolfinx.fem.form(-c.residual(e))
     applied = None
     if built.gravity is not None:
         w = model.load_factor * model.C.mass_per_area * ufl.dot(built.gravity, e) * model.dx_full

@@ -13,6 +13,7 @@ thickness fails at once, naming the file and the key, instead of deep inside a N
     ease = { waist = -0.04 }    # fraction of the body girth per level (or one number)
     [physics]
     friction = 0.4
+    terms = "my_laws.py:terms"  # optional: edits the built problem before the solve
     [dressing]
     steps = 4
 
@@ -22,10 +23,14 @@ Every key has a default (the dataclass field); :func:`dump` writes the scene act
 from __future__ import annotations
 
 import difflib
+import importlib
+import importlib.util
 import math
+import sys
 import tomllib
 import types
 import typing
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
@@ -114,6 +119,9 @@ class PhysicsConfig:
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
     max_updates: int = 8  # augmented-Lagrangian multiplier updates
     body_surface: str = "smooth"  # smooth (contact.smooth: C² IMLS distance) | faceted
+    #: "module:function" or "file.py:function" (relative to the scene file): a hook called with
+    #: the built problem before the solve, to replace laws or add terms (``scene.run``)
+    terms: str = ""
 
 
 @dataclass(frozen=True)
@@ -178,9 +186,52 @@ EASE_LEVELS = {
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
-BODY_SURFACES = ("faceted", "smooth")  # contact.search.BodySurface | contact.smooth.SmoothBody
+BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
+
+
+def load_terms(spec: str, source: str = "") -> Callable[[Any], None] | None:
+    """The hook named by ``[physics] terms`` (None when empty), or a one-line SceneError.
+
+    ``spec`` is ``"module:function"`` (an importable module, or one next to the scene file) or
+    ``"file.py:function"`` (a path, relative to the scene file's folder).
+    """
+    if not spec:
+        return None
+    key = "physics.terms"
+    where, sep, name = spec.rpartition(":")
+    if not sep or not where or not name.isidentifier():
+        raise SceneError(source, key, f"must be 'module:function' or 'file.py:function', "
+                         f"got {spec!r}")  # fmt: skip
+    folder = Path(source).parent if source else Path.cwd()
+    try:
+        module = _import_terms(where, folder)
+    except Exception as err:  # an import error of the user's module, whatever it is
+        raise SceneError(source, key, f"cannot import {where!r}: {type(err).__name__}: "
+                         f"{str(err).splitlines()[0] if str(err) else ''}") from err  # fmt: skip
+    hook = getattr(module, name, None)
+    if not callable(hook):
+        raise SceneError(source, key, f"{where!r} has no function {name!r}")
+    return hook
+
+
+def _import_terms(where: str, folder: Path) -> types.ModuleType:
+    """The module ``where``: a ``.py`` path (relative to ``folder``) or a dotted module name,
+    looked up next to the scene file first."""
+    if where.endswith(".py"):
+        path = Path(where) if Path(where).is_absolute() else folder / where
+        if not path.is_file():
+            raise FileNotFoundError(f"no file {path}")
+        spec = importlib.util.spec_from_file_location(f"_scene_terms_{path.stem}", path)
+        module = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(module)
+        return module
+    sys.path.insert(0, str(folder))
+    try:
+        return importlib.import_module(where)
+    finally:
+        sys.path.remove(str(folder))
 
 
 # ------------------------------------------------------------------------------------------------
@@ -357,6 +408,7 @@ def _check(s: Scene) -> None:
     _require(0 <= p.friction <= 2, src, "physics.friction", f"must lie in [0, 2], got {p.friction}")
     _one_of(p.contact, CONTACT_METHODS, src, "physics.contact")
     _one_of(p.body_surface, BODY_SURFACES, src, "physics.body_surface")
+    load_terms(p.terms, src)
     _require(0 < p.tolerance <= 1, src, "physics.tolerance",
              f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")  # fmt: skip
     _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")

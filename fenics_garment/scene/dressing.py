@@ -42,6 +42,7 @@ class DressStep:
     # r_k/r_(k-1) of the last two Newton iterations (quadratic convergence: the last ≪ the one
     # before); empty when the solve took fewer than two iterations
     final_ratios: list[float] = field(default_factory=list)
+    residuals: list[float] = field(default_factory=list)  # ‖F‖ of every Newton iterate
 
 
 def final_ratios(solver: NonlinearSolver) -> list[float]:
@@ -264,6 +265,7 @@ def dress(
         if reason > 0:
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rec.final_ratios = final_ratios(solver)
+            rec.residuals = solver.residual_history().tolist()
             rep.steps.append(rec)
             rep.spring_traction = rec.regularisation * reg.stretch(q)
             st.accept_step()
@@ -416,6 +418,7 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint) -> 
         moved = reg.stretch(model.q)
         rec = DressStep(0.0, its, reason, 0, time.perf_counter() - t0, c, "release")
         rec.final_ratios = final_ratios(solver)
+        rec.residuals = solver.residual_history().tolist()
         rep.steps.append(rec)
         rep.final_regularisation = c
         rep.spring_traction = c * moved

@@ -19,8 +19,10 @@ does not cross a band boundary).
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import asdict, dataclass, replace
 from pathlib import Path
+from typing import Any
 
 from fenics_garment import output, units
 from fenics_garment._stack import MPI
@@ -117,6 +119,7 @@ def coarse_scene(scene: config.Scene) -> config.Scene:
 
 
 def run_with_error_bars(
+    run: Callable[..., Any],
     scene: config.Scene,
     out_root: str | Path | None = None,
     *,
@@ -126,6 +129,9 @@ def run_with_error_bars(
     **kwargs,
 ):
     """Run ``scene`` on the meshes 2h then h; the fine run's summary and CSV get error bars.
+
+    ``run`` is the one-level run, :func:`fenics_garment.scene.run.run` (passed in, so that this
+    module does not import the module that dispatches to it).
 
     The coarse run's own outputs go to ``<out>/<name>/coarse_level/<name>/``. The whole run's
     folder is locked meanwhile and its ``scene_used.toml`` records ``error_bars = true``, so
@@ -151,8 +157,8 @@ def run_with_error_bars(
         output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
         say(f"error bars: solving on the coarser garment mesh first "
             f"(mesh_size {2 * scene.garment.mesh_size:g} m)")  # fmt: skip
-        coarse = _coarse_level(scene, folder / run_folder.NESTED / scene.name, comm, kwargs)
-        fine = _fine_level(scene, folder, comm, quiet, kwargs)
+        coarse = _coarse_level(run, scene, folder / run_folder.NESTED / scene.name, comm, kwargs)
+        fine = _fine_level(run, scene, folder, comm, quiet, kwargs)
         _attach_bars(fine, coarse, state.run_id, comm)
         state.finish("completed" if fine.completed and fine.checks_passed else
                      "stopped" if not fine.completed else "checks failed")  # fmt: skip
@@ -190,10 +196,8 @@ def _finished_summary(folder: Path, comm: MPI.Comm) -> dict | None:
     return summary if isinstance(summary, dict) and "regions" in summary else None
 
 
-def _coarse_level(scene: config.Scene, folder: Path, comm: MPI.Comm, kwargs: dict) -> dict:
+def _coarse_level(run, scene: config.Scene, folder: Path, comm: MPI.Comm, kwargs: dict) -> dict:
     """The coarse level's summary: read back when it finished, else resumed or run."""
-    from fenics_garment.scene.run import run
-
     done = _finished_summary(folder, comm)
     if done is not None:
         return done
@@ -203,10 +207,8 @@ def _coarse_level(scene: config.Scene, folder: Path, comm: MPI.Comm, kwargs: dic
     return run(sc, folder.parent, quiet=True, comm=comm, **kwargs).summary
 
 
-def _fine_level(scene: config.Scene, folder: Path, comm: MPI.Comm, quiet: bool, kwargs: dict):
+def _fine_level(run, scene: config.Scene, folder: Path, comm: MPI.Comm, quiet: bool, kwargs: dict):
     """The fine level (recording the whole run's scene), resumed when it has a checkpoint."""
-    from fenics_garment.scene.run import run
-
     fine = replace(scene, output=replace(scene.output, error_bars=False))
     if _has_checkpoint(folder, comm):
         return run(fine, quiet=quiet, comm=comm, resume=folder, record=scene, **kwargs)

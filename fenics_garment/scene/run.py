@@ -1,5 +1,11 @@
 """Run a scene: build, dress, write outputs (seed paper §4.1, steps 1–12).
 
+Three stages, :func:`build_stage` → :func:`solve_stage` → :func:`write_stage`. Between build and
+solve the problem (:class:`~fenics_garment.scene.build.Built`: energy laws, contact and
+friction laws, loads, constraints, as plain values) is handed to the scene's
+``[physics] terms = "module:function"`` hook and to ``run(..., terms=hook)``, which may replace
+laws or add terms (``demos/variants.py``); every output is then derived from the terms in use.
+
 One output folder per run, ``<output.folder>/<name>/``:
 
 * ``scene_used.toml`` — the scene with every default filled in;
@@ -33,7 +39,7 @@ from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.scene import build as scene_build
-from fenics_garment.scene import checkpoint, checks, config, preflight
+from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight
 from fenics_garment.scene import folder as run_folder
 from fenics_garment.scene.dressing import (
     RELEASE_TOLERANCE,
@@ -43,7 +49,6 @@ from fenics_garment.scene.dressing import (
     Progress,
     dress,
 )
-from fenics_garment.shell.energy import membrane_forces
 from fenics_garment.shell.model import DEFAULT_ELEMENT
 from fenics_garment.solve import NonlinearSolver
 
@@ -89,7 +94,7 @@ def _membrane_fields(model) -> ufl.core.expr.Expr:
     eps = kin.membrane
     a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
     e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
-    N = membrane_forces(kin, model.C)
+    N = model.membrane_forces()  # of the membrane law in use
     return ufl.as_vector([e_max, N[0, 0], N[1, 1], N[0, 1]])
 
 
@@ -266,6 +271,16 @@ def element_warning(variant) -> str | None:
             f"{DEFAULT_ELEMENT}")  # fmt: skip
 
 
+#: A hook that edits the built problem between build and solve: ``hook(built) -> None``.
+#: ``built`` (:class:`~fenics_garment.scene.build.Built`) is the scene's problem as plain values:
+#: ``built.model`` (the shell's energy laws ``membrane``, ``bending``, ``shear``, ``drilling``,
+#: plus ``add_energy`` / ``add_residual`` / loads), ``built.contact`` (``normal_law``,
+#: ``friction`` with its ``law``, ``kappa``), ``built.bcs``, ``built.regularisation``;
+#: ``built.terms()`` lists what is in use. Everything downstream — the residual, the stick/slip
+#: and multiplier updates, the pressure and membrane-force outputs — is made from it.
+TermsHook = Callable[[scene_build.Built], None]
+
+
 def run(
     scene: config.Scene,
     out_root: str | Path | None = None,
@@ -277,8 +292,15 @@ def run(
     checkpoints: bool = True,
     record: config.Scene | None = None,
     clear: bool = True,
+    terms: TermsHook | None = None,
 ) -> RunResult:
     """Build, dress and write every output of ``scene`` (see the module doc).
+
+    Three stages: :func:`build_stage` (body, garment, model, contact: the problem),
+    :func:`solve_stage` (the dressing) and :func:`write_stage` (fields, checks, files). Between
+    the first two the problem can be edited: by the scene's ``[physics] terms = "module:function"``
+    (:func:`fenics_garment.scene.config.load_terms`), then by ``terms`` (a :data:`TermsHook`),
+    e.g. ``run(scene, terms=lambda built: setattr(built.model, "membrane", my_law))``.
 
     ``first_step`` (a fraction of the initial shrink) overrides the first dressing step.
     A dressing that fails after its step cuts still writes the outputs of the last converged
@@ -296,10 +318,10 @@ def run(
     :class:`~fenics_garment.output.OutputError` when a file cannot be written mid-run.
     """
     if scene.output.error_bars and record is None:  # two mesh levels (scene.error_bars)
-        from fenics_garment.scene.error_bars import run_with_error_bars
-
-        return run_with_error_bars(scene, out_root, quiet=quiet, comm=comm, resume=resume,
-                                   first_step=first_step, checkpoints=checkpoints)  # fmt: skip
+        return error_bars.run_with_error_bars(
+            run, scene, out_root, quiet=quiet, comm=comm, resume=resume, first_step=first_step,
+            checkpoints=checkpoints, terms=terms,
+        )  # fmt: skip
     recorded = record or scene
     preflight.scene_limits(scene)
     meta = None
@@ -315,7 +337,7 @@ def run(
     try:
         state.start(fresh=meta is None, clear=clear)
         result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
-                         checkpoints=checkpoints)  # fmt: skip
+                         checkpoints=checkpoints, terms=terms)  # fmt: skip
     except output.OutputError as err:
         state.finish("failed", collective=False)
         err.folder = err.folder or folder
@@ -354,26 +376,84 @@ def _run_in(
     quiet: bool,
     first_step: float | None,
     checkpoints: bool,
+    terms: TermsHook | None = None,
 ) -> RunResult:
-    """The run itself, in its locked folder."""
+    """The run itself, in its locked folder: build, edit, solve, write."""
     folder, comm = state.path, state.comm
     t_start = time.perf_counter()
     say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
     text = config.dumps(recorded)
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
+    built = build_stage(scene, comm, say, times, check=meta is None)
+    for hook in (config.load_terms(scene.physics.terms, scene.source), terms):
+        if hook is not None:
+            hook(built)
+    tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
+    solved = solve_stage(built, folder, recorded, meta, say, times, first_step=first_step,
+                         checkpoints=checkpoints)  # fmt: skip
+    result = write_stage(built, solved, tight, times, t_start)
+    result.summary["run_id"] = state.run_id
+    _write_outputs(folder, built, result)
+    state.finish(_status(result))
+    _print_regions(say, result.regions)
+    for c in result.checks:
+        if not c.ok:
+            say("  " + c.warning())
+    say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
+    return result
+
+
+def build_stage(
+    scene: config.Scene,
+    comm: MPI.Comm,
+    say: Callable[..., object] = lambda *a: None,
+    times: dict[str, float] | None = None,
+    *,
+    check: bool = True,
+) -> scene_build.Built:
+    """Stage 1: the problem of ``scene`` (:func:`fenics_garment.scene.build.build`), checked
+    (``check``: ``scene.preflight``) but not yet compiled: edit it before :func:`solve_stage`."""
     t0 = time.perf_counter()
     say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
         f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
     built = scene_build.build(scene, comm)
-    times["geometry_and_model"] = time.perf_counter() - t0
+    elapsed = time.perf_counter() - t0
+    if times is not None:
+        times["geometry_and_model"] = elapsed
     say(f"  garment: {len(built.garment.cells)} cells, element {scene.garment.element}, "
-        f"{built.dofs} dofs ({times['geometry_and_model']:.1f} s)")  # fmt: skip
+        f"{built.dofs} dofs ({elapsed:.1f} s)")  # fmt: skip
     if (warning := element_warning(built.model.variant)) is not None:
         say("  " + warning)
-    if meta is None:
+    if check:
         preflight.check_built(built)
-    tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
+    return built
+
+
+@dataclass
+class Solved:
+    """What :func:`solve_stage` leaves for :func:`write_stage`."""
+
+    solver: NonlinearSolver
+    report: DressReport
+    completed: bool
+    message: str
+
+
+def solve_stage(
+    built: scene_build.Built,
+    folder: Path,
+    recorded: config.Scene,
+    meta: dict | None,
+    say: Callable[..., object],
+    times: dict[str, float],
+    *,
+    first_step: float | None = None,
+    checkpoints: bool = True,
+) -> Solved:
+    """Stage 2: compile the residual of the problem as it is now and dress (VTX frames and
+    checkpoints on the way; ``meta``: the checkpoint to resume from)."""
+    scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
@@ -398,19 +478,20 @@ def _run_in(
     _say_release(say, built, report, completed)
     if completed:
         frames.write()
-    t0 = time.perf_counter()
     frames.close(comm)
-    result = _outputs(built, solver, report, (completed, message), tight, times)
+    return Solved(solver, report, completed, message)
+
+
+def write_stage(
+    built: scene_build.Built, solved: Solved, tight: float, times: dict[str, float], t_start: float
+) -> RunResult:
+    """Stage 3: the fields, measures, checks and summary of the final state (collective), all
+    from the problem's terms in use; the files are written by the caller."""
+    t0 = time.perf_counter()
+    result = _outputs(built, solved.solver, solved.report, (solved.completed, solved.message),
+                      tight, times)  # fmt: skip
     times["outputs"] = time.perf_counter() - t0
     times["total"] = time.perf_counter() - t_start
-    result.summary["run_id"] = state.run_id
-    _write_outputs(folder, built, result)
-    state.finish(_status(result))
-    _print_regions(say, result.regions)
-    for c in result.checks:
-        if not c.ok:
-            say("  " + c.warning())
-    say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
     return result
 
 
@@ -525,6 +606,7 @@ def _outputs(
         "tight_area_m2": tight,  # of the pattern inside the body at the start
         "forces_N": {"applied": applied.tolist(), "reaction": reaction.tolist()},
         "max_membrane_strain": max_strain,
+        "terms": built.terms(),  # the laws and terms of the problem solved
         "dressing": report.as_dict(),
         "time_s": times,
         "solver_time_s": {

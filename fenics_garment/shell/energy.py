@@ -19,7 +19,8 @@ and is returned as a residual contribution instead.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -74,11 +75,17 @@ def membrane_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.exp
     return _orthotropic_quadratic(kin.membrane, C.A11, C.A22, C.A12, C.A66)
 
 
-def membrane_forces(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
-    """N = ∂ψ_m/∂ε [N/m]: the membrane stress resultants (2×2, warp/weft frame) of
-    :func:`membrane_energy` — derived from it, so a replaced energy gives its own forces."""
+def membrane_forces(
+    kin: ShellKinematics,
+    C: StiffnessConstants,
+    membrane: Callable[[ShellKinematics, StiffnessConstants], ufl.core.expr.Expr] = membrane_energy,
+) -> ufl.core.expr.Expr:
+    """N = ∂ψ_m/∂ε [N/m]: the membrane stress resultants (2×2, warp/weft frame) of the law
+    ``membrane`` (default :func:`membrane_energy`), by differentiating it with respect to the
+    membrane strain ε (the other kinematic fields held fixed) — never restated, so a replaced
+    law gives its own forces (``ShellModel.membrane_forces`` passes the law in use)."""
     eps = ufl.variable(kin.membrane)
-    return ufl.diff(_orthotropic_quadratic(eps, C.A11, C.A22, C.A12, C.A66), eps)
+    return ufl.diff(membrane(replace(kin, membrane=eps), C), eps)
 
 
 def bending_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:

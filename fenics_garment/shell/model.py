@@ -83,11 +83,58 @@ def _variant_for(mesh, name: str | None) -> ElementVariant:
 
 
 @dataclass
+class Discretisation:
+    """What a model's forms are built on: the mixed space, the unknown, the switches and the
+    measures. Shared by a model and its ``dataclasses.replace`` copies (same geometry and
+    element), so terms already built on the unknown (contact, springs) stay valid."""
+
+    geometry: ShellGeometry
+    variant: ElementVariant
+    Q: dolfinx.fem.FunctionSpace
+    q: dolfinx.fem.Function
+    load_factor: dolfinx.fem.Constant
+    extra_switch: dolfinx.fem.Constant
+    h_cell: dolfinx.fem.Function
+    dx_full: ufl.Measure
+    dx_reduced: ufl.Measure
+
+    @classmethod
+    def create(cls, geometry: ShellGeometry, variant: ElementVariant) -> Discretisation:
+        mesh = geometry.mesh
+        cell = mesh.basix_cell()
+        v = variant
+        Pu = basix.ufl.element("Lagrange", cell, v.u_degree)
+        if v.bubble:
+            Pu = basix.ufl.enriched_element([Pu, basix.ufl.element("Bubble", cell, 3)])
+        Ue = basix.ufl.blocked_element(Pu, shape=(3,))
+        Pt = basix.ufl.element("Lagrange", cell, v.theta_degree)
+        if v.theta_bubble:
+            Pt = basix.ufl.enriched_element([Pt, basix.ufl.element("Bubble", cell, 3)])
+        Te = basix.ufl.blocked_element(Pt, shape=(3,))
+        Q = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([Ue, Te]))
+
+        def one() -> dolfinx.fem.Constant:
+            return dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
+
+        return cls(
+            geometry, v, Q, dolfinx.fem.Function(Q, name="q"), one(), one(),
+            terms.cell_size(mesh),
+            ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": v.full_degree}),
+            ufl.Measure("dx", domain=mesh, metadata={"quadrature_degree": v.reduced_degree}),
+        )  # fmt: skip
+
+
+@dataclass
 class ShellModel:
     """Geometrically nonlinear Naghdi shell on ``geometry`` made of ``material``.
 
-    The energy terms are fields: replace one with ``dataclasses.replace`` or by assignment before
-    calling :meth:`residual`.
+    The energy terms are fields, each a law ``(kin, C) -> ψ`` (:mod:`fenics_garment.shell.energy`):
+    replace one by assignment (``model.membrane = my_law``) or with
+    ``dataclasses.replace(model, membrane=my_law)`` before the solver is built. The copy shares
+    the unknown and spaces (:class:`Discretisation`) and copies the added loads, energies and
+    residual terms, so it works with contact attached; the outputs derived from a term
+    (:meth:`membrane_forces`) follow the replaced law. Further terms: :meth:`add_energy`
+    (a potential, varied with the rest), :meth:`add_residual` (any virtual work).
     """
 
     geometry: ShellGeometry
@@ -102,34 +149,25 @@ class ShellModel:
     _work: list = field(default_factory=list, repr=False)
     _follower: list = field(default_factory=list, repr=False)
     _extra_residual: list = field(default_factory=list, repr=False)
+    _energy: list = field(default_factory=list, repr=False)
+    discretisation: Discretisation | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         mesh = self.geometry.mesh
         self.variant = _variant_for(mesh, self.element)
-        cell = mesh.basix_cell()
-        v = self.variant
-        Pu = basix.ufl.element("Lagrange", cell, v.u_degree)
-        if v.bubble:
-            Pu = basix.ufl.enriched_element([Pu, basix.ufl.element("Bubble", cell, 3)])
-        Ue = basix.ufl.blocked_element(Pu, shape=(3,))
-        Pt = basix.ufl.element("Lagrange", cell, v.theta_degree)
-        if v.theta_bubble:
-            Pt = basix.ufl.enriched_element([Pt, basix.ufl.element("Bubble", cell, 3)])
-        Te = basix.ufl.blocked_element(Pt, shape=(3,))
-        self.Q = dolfinx.fem.functionspace(mesh, basix.ufl.mixed_element([Ue, Te]))
-        self.q = dolfinx.fem.Function(self.Q, name="q")
+        d = self.discretisation
+        if d is None or d.geometry is not self.geometry or d.variant != self.variant:
+            d = self.discretisation = Discretisation.create(self.geometry, self.variant)
+        # a replace() copy must not add to the lists of the model it was copied from
+        self._work, self._follower = list(self._work), list(self._follower)
+        self._extra_residual, self._energy = list(self._extra_residual), list(self._energy)
+        self.Q, self.q = d.Q, d.q
+        self.load_factor, self.extra_switch = d.load_factor, d.extra_switch
+        self.h_cell, self.dx_full, self.dx_reduced = d.h_cell, d.dx_full, d.dx_reduced
         self.stiffness = self.material.stiffness()
         self.C = terms.StiffnessConstants.create(mesh, self.stiffness, self.drilling_factor)
-        self.load_factor = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
-        self.extra_switch = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
-        self.h_cell = terms.cell_size(mesh)
         self.t_eff = dolfinx.fem.Constant(
             mesh, dolfinx.default_scalar_type(self.stiffness.effective_thickness)
-        )
-        md = {"quadrature_degree": v.full_degree}
-        self.dx_full = ufl.Measure("dx", domain=mesh, metadata=md)
-        self.dx_reduced = ufl.Measure(
-            "dx", domain=mesh, metadata={"quadrature_degree": v.reduced_degree}
         )
 
     # -- unknowns ---------------------------------------------------------------------------
@@ -164,7 +202,29 @@ class ShellModel:
             Pi += alpha * psi_ms * self.dx_full + (1 - alpha) * psi_ms * self.dx_reduced
         else:
             Pi += psi_ms * self.dx_full
+        for density, measure in self._energy:
+            psi = density if isinstance(density, ufl.core.expr.Expr) else density(kin, C)
+            Pi += psi * measure
         return Pi
+
+    @property
+    def added_energies(self) -> tuple:
+        """The (density, measure) pairs of :meth:`add_energy`."""
+        return tuple(self._energy)
+
+    @property
+    def added_residuals(self) -> tuple:
+        """The forms and builders of :meth:`add_residual` (contact, springs, user terms)."""
+        return tuple(self._extra_residual)
+
+    @property
+    def loads(self) -> dict[str, tuple]:
+        """The dead loads ((work density, measure) pairs) and follower pressures."""
+        return {"dead": tuple(self._work), "follower": tuple(self._follower)}
+
+    def membrane_forces(self) -> ufl.core.expr.Expr:
+        """N = ∂ψ_m/∂ε [N/m] of the membrane law in use (2×2, warp/weft frame)."""
+        return terms.membrane_forces(self.kinematics(), self.C, self.membrane)
 
     def add_work(self, density: ufl.core.expr.Expr, measure: ufl.Measure | None = None) -> None:
         """Add the work of a dead load (density per reference area or length), scaled by λ."""
@@ -210,13 +270,26 @@ class ShellModel:
         self._follower.append(c)
         return c
 
-    def add_residual(self, form: ufl.Form) -> None:
-        """Add a residual form (e.g. contact), linear in the test function of ``self.Q``.
+    def add_residual(self, form: ufl.Form | Callable[[], ufl.Form]) -> None:
+        """Add a residual form (e.g. contact), linear in the test function of ``self.Q``, or a
+        builder ``() -> form`` called when :meth:`residual` is (so that it uses the laws in use
+        then, e.g. :class:`~fenics_garment.contact.shell.ShellContact`'s).
 
         Added forms are multiplied by ``self.extra_switch`` (1 = on), so that the solver can take
         the round-off floor of the internal forces alone without compiling a second form.
         """
         self._extra_residual.append(form)
+
+    def add_energy(
+        self, density: ufl.core.expr.Expr | EnergyTerm, measure: ufl.Measure | None = None
+    ) -> None:
+        """Add an energy density ψ to the internal energy, Π += ∫ ψ dA (default ``dx_full``).
+
+        ``density``: a UFL expression of the unknown, or a law ``(kin, C) -> ψ`` like the shell
+        terms (evaluated on the model's kinematics when the residual is built). It is varied with
+        the rest of Π, so the Jacobian stays symmetric (e.g. an elastic foundation).
+        """
+        self._energy.append((density, measure or self.dx_full))
 
     def external_work(self) -> ufl.Form | None:
         forms = [self.load_factor * w * m for w, m in self._work]
@@ -235,7 +308,7 @@ class ShellModel:
             for p in self._follower:
                 F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
         for extra in self._extra_residual:
-            F += self.extra_switch * extra
+            F += self.extra_switch * (extra if isinstance(extra, ufl.Form) else extra())
         return F
 
     def jacobian(self, F: ufl.Form) -> ufl.Form:

@@ -12,7 +12,8 @@ from fenics_garment._stack import MPI  # noqa: I001
 import numpy as np
 import pytest
 
-from fenics_garment.contact import scenes, uzawa
+from fenics_garment.contact import uzawa
+from fenics_garment.verification import contact as cases
 from fenics_garment.materials import Isotropic
 
 ISO = Isotropic(E=1.0e6, nu=0.3, thickness=1.0e-3)
@@ -33,13 +34,13 @@ def min_angle_deg(mesh) -> float:
 @pytest.mark.slow  # nightly: `make test-slow` (also in .ci/run)
 @pytest.mark.parametrize("distortion, max_angle", [(0.5, 25.0), (0.8, 10.0)])
 def test_distorted_mesh(distortion, max_angle):
-    sc = scenes.tight_tube(MPI.COMM_WORLD, ISO, distortion=distortion)
+    sc = cases.tight_tube(MPI.COMM_WORLD, ISO, distortion=distortion)
     angle = min_angle_deg(sc.model.geometry.mesh)
     assert angle < max_angle  # the mesh really is that bad
-    scenes.dress(sc)
+    cases.dress_case(sc)
     al = uzawa.augmented_lagrangian(
         sc.state, float(sc.contact.kappa.value), sc.solver.solve, tol=0.01 * H
     )
-    err = scenes.mid_pressure(sc) / sc.reference - 1
+    err = cases.mid_pressure(sc) / sc.reference - 1
     print(f"\nmin angle {angle:.1f}°: error {err:+.3%}, multiplier updates {len(al.penetration)}")
     assert al.converged and abs(err) < 0.01

@@ -3,8 +3,9 @@
 The tube scene (``demos/tube_on_cylinder.toml``) with its pattern cut 12 % and 35 % smaller
 than the cylinder (R = 0.1 m): the tube starts 12 mm / 35 mm inside the body. The dressing
 shrinks the body inside the tube and grows it back; it must either finish at Laplace's pressure
-of the stretched tube (``contact.scenes.tube_pressure``, free ends) or stop with a clear message
-(``completed`` False, the reason and the last converged state) — never NaN or a hang.
+of the stretched tube (``verification.contact.tube_pressure``, free ends) or stop
+with a clear message (``completed`` False, the reason and the last converged state) — never
+NaN or a hang.
 Augmented Lagrangian contact (the penalty alone left −5.3 % at 35 %: 50 % hoop stretch).
 Measured (P1-P1, h = 2 cm, AL): −12 %: 881.1 Pa against 881.5 Pa (−0.04 %); −35 %: 7 solves, 19
 Newton iterations, 6647 Pa against 6781 Pa (−1.97 %) with the earlier three-stage spring release;
@@ -22,9 +23,9 @@ import pytest
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import pressure as cpressure
-from fenics_garment.contact.scenes import tube_pressure
 from fenics_garment.scene import config
 from fenics_garment.scene.run import run
+from fenics_garment.verification.contact import tube_pressure
 
 SCENE = Path(__file__).parents[2] / "demos" / "tube_on_cylinder.toml"
 

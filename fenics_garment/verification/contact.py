@@ -35,7 +35,7 @@ from fenics_garment._stack import MPI, dolfinx
 from fenics_garment.contact import pressure
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.primitives import cylinder, sphere_patch
-from fenics_garment.contact.search import BodySurface
+from fenics_garment.contact.search import SearchSurface
 from fenics_garment.shell import bcs as shell_bcs
 from fenics_garment.shell.geometry import parametric_surface_mesh
 from fenics_garment.shell.kinematics import ShellGeometry
@@ -48,7 +48,7 @@ ORTHO = dict(E_warp=2.0e6, E_weft=0.5e6, G12=2.0e5, B_warp=1.0e-4, B_weft=2.5e-5
 
 
 @dataclass
-class Scene:
+class ContactCase:
     model: ShellModel
     contact: shell_contact.ShellContact
     solver: NonlinearSolver
@@ -169,15 +169,15 @@ def tight_tube(
     n_body_z: int = 4,
     distortion: float = 0.0,
     options: dict | None = None,
-    surface: type[BodySurface] = BodySurface,
-) -> Scene:
+    surface: type[SearchSurface] = SearchSurface,
+) -> ContactCase:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
 
     ``n`` = (cells around the quarter circle, cells along the half length); the body cylinder
     (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along. ``distortion`` moves the
     interior nodes within the surface by up to that fraction of a cell (pseudo-random, fixed):
     the geometry stays exact, the triangles get distorted. ``surface``: the body's class
-    (:class:`BodySurface`, faceted, or :class:`fenics_garment.contact.smooth.SmoothBody`).
+    (:class:`SearchSurface`, faceted, or :class:`fenics_garment.contact.smooth.SmoothBody`).
     """
     mesh = parametric_surface_mesh(
         comm, lambda t, z: np.vstack([r0 * np.cos(t), r0 * np.sin(t), z]),
@@ -200,7 +200,7 @@ def tight_tube(
     s = model.stiffness
     R_c = R + s.thickness / 2
     ref = tube_pressure(R_c, r0, s, warp=warp)
-    return Scene(model, contact, solver, bcs, ref, R, r0,
+    return ContactCase(model, contact, solver, bcs, ref, R, r0,
                  {"L": L, "warp": warp, "membrane_only": tube_pressure(R_c, r0, s, warp=warp,
                                                                        bending=False)})  # fmt: skip
 
@@ -219,8 +219,8 @@ def tight_cap(
     element: str | None = None,
     n_body: int = 160,
     options: dict | None = None,
-    surface: type[BodySurface] = BodySurface,
-) -> Scene:
+    surface: type[SearchSurface] = SearchSurface,
+) -> ContactCase:
     """A spherical cap (a cube-sphere face patch, |x/z|, |y/z| ≤ tan(half_angle)) of rest radius
     r0 on a rigid sphere of radius R; its edge follows the exact solution u = (λ(s) − 1)X, θ = 0,
     with λ(s) = (R_c − s)/r0 for the body shrink s."""
@@ -251,21 +251,21 @@ def tight_cap(
         u_edge.interpolate(lambda x: (lam - 1) * x)
 
     ref = cap_pressure(R_c, r0, s)
-    return Scene(model, contact, solver, bcs, ref, R, r0,
+    return ContactCase(model, contact, solver, bcs, ref, R, r0,
                  {"set_edge": set_edge, "half_angle": half_angle,
                   "membrane_only": cap_pressure(R_c, r0, s, bending=False)})  # fmt: skip
 
 
 @dataclass
-class DressReport:
+class SolveHistory:
     iterations: list[int] = field(default_factory=list)
     residuals: list[list[float]] = field(default_factory=list)
 
 
-def dress(scene: Scene, steps=(0.5, 0.0)) -> DressReport:
+def dress_case(scene: ContactCase, steps=(0.5, 0.0)) -> SolveHistory:
     """Shrink the body by s = f·(R_c − r0) for each f of ``steps`` and solve (ending at f = 0)."""
     st = scene.state
-    rep = DressReport()
+    rep = SolveHistory()
     for f in steps:
         shrink = f * scene.penetration0
         st.shrink.value = shrink
@@ -280,7 +280,7 @@ def dress(scene: Scene, steps=(0.5, 0.0)) -> DressReport:
     return rep
 
 
-def mid_pressure(scene: Scene, where=None) -> float:
+def mid_pressure(scene: ContactCase, where=None) -> float:
     """Contact force over deformed area, Σ t_N w dA / Σ J_s w dA, over the contact points of
     the cells in the region far from the edges (all ranks).
 
@@ -336,7 +336,7 @@ def capstan_strip(
     thickness: float = 1.0e-3,
     kappa_hat: float = 10.0,
     options: dict | None = None,
-) -> Scene:
+) -> ContactCase:
     """A shell strip (ν = 0) wrapped on a rigid cylinder by θ = π/2, with straight tails.
 
     End A (tail along y, at y = −tail) is clamped; end B (tail along −x) has its rotations fixed
@@ -358,7 +358,7 @@ def capstan_strip(
         mesh, warp=(0.0, 0.0, 1.0), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
     )
     model = ShellModel(geo, Isotropic(E=E, nu=0.0, thickness=thickness))
-    body = BodySurface(*cylinder(R, -0.05, 0.05, 2048, 2))
+    body = SearchSurface(*cylinder(R, -0.05, 0.05, 2048, 2))
     contact = shell_contact.attach(model, body, kappa_hat=kappa_hat, mu=mu, band=0.01)
     delta = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
     end_b = lambda x: np.isclose(x[0], -tail)  # noqa: E731
@@ -368,10 +368,10 @@ def capstan_strip(
     solver = _solver(model, bcs, contact, options)
     extra = {"delta": delta, "tail": tail, "rho": rho, "theta": theta, "width": width,
              "EA": E * thickness * width}  # fmt: skip
-    return Scene(model, contact, solver, bcs, float(np.exp(mu * theta)), R, rho, extra)
+    return ContactCase(model, contact, solver, bcs, float(np.exp(mu * theta)), R, rho, extra)
 
 
-def tail_tensions(scene: Scene) -> tuple[float, float]:
+def tail_tensions(scene: ContactCase) -> tuple[float, float]:
     """Tension forces [N] in the held tail A and the pulled tail B, from their stretch.
 
     A straight, contact-free tail of this ν = 0 SVK strip is in uniaxial tension: stretch
