@@ -79,6 +79,50 @@ def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
     return pts, np.full(len(pts), volume / len(pts))
 
 
+def _point_keys(mesh: dolfinx.mesh.Mesh, cells: npt.NDArray[np.int32], rule: str,
+                n_points: int) -> npt.NDArray[np.int64] | None:  # fmt: skip
+    """One integer per contact point (cells × points of the rule): equal for the same point.
+
+    The nodal rules' points are cell vertices, then edge midpoints in the reference cell's edge
+    order (:func:`contact_rule`), then (``"lumped"``) the centroid. DOLFINx numbers a cell's
+    vertices and edges in that same reference order, so a point shared by two cells gets the
+    vertex or edge index as its key: vertex v → v, edge e → n_v + e, centroid of cell c →
+    n_v + n_e + c. ``None`` for the Gauss rules (no point is shared).
+
+    The garment's position x = X + u is continuous, so both cells of a shared point give the
+    same x (to rounding: the two cells' basis functions are evaluated separately).
+    """
+    if rule not in ("vertex", "vertex+edge", "lumped"):
+        return None
+    top, tdim = mesh.topology, mesh.topology.dim
+    reference = basix.topology(getattr(basix.CellType, top.cell_name()))
+    n_vertices, n_edges = len(reference[0]), len(reference[1])
+    vertices = top.connectivity(tdim, 0).array.reshape(-1, n_vertices)[cells]
+    keys = [vertices.astype(np.int64)]
+    n_v = top.index_map(0).size_local + top.index_map(0).num_ghosts
+    if rule != "vertex":
+        top.create_connectivity(tdim, 1)
+        edges = top.connectivity(tdim, 1).array.reshape(-1, n_edges)
+        keys.append(n_v + edges[cells].astype(np.int64))
+        n_e = top.index_map(1).size_local + top.index_map(1).num_ghosts
+        if rule == "lumped":
+            keys.append((n_v + n_e + cells.astype(np.int64))[:, None])
+    out = np.hstack(keys)
+    if out.shape[1] != n_points:  # pragma: no cover - a rule whose layout is not the above
+        raise ValueError(f"contact rule {rule!r}: {n_points} points, {out.shape[1]} keys")
+    return out
+
+
+def _unique_points(mesh: dolfinx.mesh.Mesh, cells: npt.NDArray[np.int32], rule: str,
+                   n_points: int) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+    """(first, inverse): the contact points searched (one per distinct point, the first cell's
+    copy) and, for every point, which of them it is; ``None`` when no point is shared."""
+    keys = _point_keys(mesh, cells, rule, n_points)
+    if keys is None:
+        return None
+    return np.unique(keys.ravel(), return_index=True, return_inverse=True)[1:]
+
+
 @dataclass
 class Timings:
     """Accumulated wall time [s] and call counts of the refresh."""
@@ -156,15 +200,7 @@ class ContactState:
         self._cells = np.arange(n_owned, dtype=np.int32)
         self._dofs = self.Qs.dofmap.list[self._cells].ravel()
         self._broad = BroadPhase(band=band)
-        self._unique: tuple[np.ndarray, np.ndarray] | None = None
-        gdofs = mesh.geometry.dofmaps[0]
-        n_nodal = {"vertex": 3, "vertex+edge": 6, "lumped": 6}.get(rule, 0)
-        if 0 < n_nodal <= gdofs.shape[1]:  # points at geometry nodes: search each node once
-            nodes = gdofs[self._cells][:, :n_nodal]
-            if len(self.points) > n_nodal:  # the centroid: one point per cell
-                centre = len(mesh.geometry.x) + self._cells[:, None]
-                nodes = np.hstack([nodes, centre])
-            self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
+        self._unique = _unique_points(mesh, self._cells, rule, len(self.points))
         self.timings = Timings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
