@@ -32,6 +32,8 @@ pseudonormal sign stays the robust inside/outside test.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import csr_matrix
@@ -179,12 +181,13 @@ def _hessian(q: dict[str, F64], k: npt.NDArray[np.bool_] | None, c: F64, w: F64,
 
 
 def _imls(y: F64, rho: F64, n: F64, s: F64, rows: _Rows, r: float, hessian: npt.NDArray[np.bool_],
-          vertex_terms, w: F64, z: F64) -> tuple[F64, F64, F64, F64]:  # fmt: skip
+          vertex_terms, w: F64, z: F64) -> tuple[F64, F64, Callable[[], F64], F64]:  # fmt: skip
     """f, ∇f, ∇∇f and W = Σw at the points of ``rows`` from the offsets y = x − p to their
     neighbours p, ρ = |y|, w = φ(ρ/r), z = n·y and the neighbours' normals n and shape
     operators S, given as flat (nnz, …) arrays in the order of ``rows``; ∇∇f only at the points
     where ``hessian`` (zero elsewhere). ``vertex_terms(k)`` gives (Σ w S, Σ w z S²) over the
-    entries k (None: all).
+    entries k (None: all). ∇∇f is returned as a function that computes it from the quantities
+    f and ∇f were computed from (when called: the Newton residual needs f and ∇f only).
 
     Per sample, with z = n·y and σ = S y:  a = z + ½ y·σ − ½ z |σ|²,
     ∇a = n + σ − ½ |σ|² n − z Sσ,  ∇∇a = S − n ⊗ Sσ − Sσ ⊗ n − z S²;
@@ -199,15 +202,20 @@ def _imls(y: F64, rho: F64, n: F64, s: F64, rows: _Rows, r: float, hessian: npt.
     f = rows.sum(w * q["a"]) / W
     c = q["a"] - f[rows.row]
     grad = rows.sum(gw * c[:, None] + w[:, None] * q["ga"]) / W[:, None]
-    hess = np.zeros((rows.m, 3, 3))
-    if hessian.all():  # every point: no subsets to gather (the same sums)
-        hess[:] = _hessian(q, None, c, w, rows, r, grad, vertex_terms(None)) / W[:, None, None]
-    elif hessian.any():
-        k = hessian[rows.row]
-        sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[hessian])
-        hess[hessian] = (
-            _hessian(q, k, c, w, sub, r, grad[hessian], vertex_terms(k)) / W[hessian][:, None, None]
-        )
+
+    def hess() -> F64:
+        out = np.zeros((rows.m, 3, 3))
+        if hessian.all():  # every point: no subsets to gather (the same sums)
+            out[:] = _hessian(q, None, c, w, rows, r, grad, vertex_terms(None)) / W[:, None, None]
+        elif hessian.any():
+            k = hessian[rows.row]
+            sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[hessian])
+            out[hessian] = (
+                _hessian(q, k, c, w, sub, r, grad[hessian], vertex_terms(k))
+                / W[hessian][:, None, None]
+            )
+        return out
+
     return f, grad, hess, wsum
 
 
@@ -281,6 +289,13 @@ class SmoothBody(BodySurface):
     ) -> tuple[F64, F64, F64, F64]:
         """f, ∇f, ∇∇f (where ``hessian``, default everywhere; zero elsewhere) and Σw of the
         IMLS function at x (m, 3)."""
+        f, g, h, wsum = self._smooth_distance(x, hessian)
+        return f, g, h(), wsum
+
+    def _smooth_distance(
+        self, x: F64, hessian: npt.NDArray[np.bool_] | None = None
+    ) -> tuple[F64, F64, Callable[[], F64], F64]:
+        """:meth:`smooth_distance` with ∇∇f as a function computing it on demand."""
         m = len(x)
         need = np.ones(m, dtype=bool) if hessian is None else hessian
         j, counts = self._cached_balls(x)
@@ -314,23 +329,37 @@ class SmoothBody(BodySurface):
         normal: str = "gradient",
         feature_tol: float = 1e-9,
         hessian_below: float = np.inf,
+        defer_hessian: bool = False,
     ) -> ClosestPoints:
         """Faceted closest point, face and sign; IMLS distance, gradient and Hessian in the band.
 
         ``normal`` is ignored inside the band (the normal there is ∇f, consistent with f). The
         Hessian is computed only where f < ``hessian_below`` (the contact-active points: the
         contact terms need it nowhere else; computed with a slack) and is zero elsewhere.
+        ``defer_hessian``: ``hessian`` is left None and ``hessian_later()`` computes it (the
+        same values, from the quantities kept from this search).
         """
         res = super().closest(points, normal, feature_tol)
-        hess = np.zeros((len(res.distance), 3, 3))
+        n_points = len(res.distance)
         near = np.flatnonzero(np.abs(res.distance) <= self.band)
+        h: Callable[[], F64] | None = None
+        ok = np.zeros(0, dtype=bool)
         if len(near):
             x = np.asarray(points, dtype=np.float64).reshape(-1, 3)[near]
             active = res.distance[near] < hessian_below + HESSIAN_SLACK * self.support_radius
-            f, g, h, wsum = self.smooth_distance(x, active)
+            f, g, h, wsum = self._smooth_distance(x, active)
             ok = wsum > 0.0
             res.distance[near[ok]] = f[ok]
             res.normal[near[ok]] = g[ok]
-            hess[near[ok]] = h[ok]
-        res.hessian = hess
+
+        def hessian() -> F64:
+            hess = np.zeros((n_points, 3, 3))
+            if h is not None:
+                hess[near[ok]] = h()[ok]
+            return hess
+
+        if defer_hessian:
+            res.hessian_later = hessian
+        else:
+            res.hessian = hessian()
         return res

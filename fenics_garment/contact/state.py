@@ -201,43 +201,49 @@ class ContactState:
         self._dofs = self.Qs.dofmap.list[self._cells].ravel()
         self._broad = BroadPhase(band=band)
         self._unique = _unique_points(mesh, self._cells, rule, len(self.points))
+        self._pending: tuple | None = None  # a deferred Hessian (refresh)
         self.timings = Timings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
         self.kappa: dolfinx.fem.Constant | None = None  # normal penalty (friction's t_N)
 
     # -- the pre-residual hook ------------------------------------------------------------------
-    def refresh(self, _: dolfinx.fem.Function | None = None) -> None:
+    def refresh(
+        self, _: dolfinx.fem.Function | None = None, *, defer_hessian: bool = False
+    ) -> None:
         """Recompute gap, normal and u_k from the current displacement (a pre-residual hook).
 
         The argument is ignored: the state evaluates its own ``u`` expression, which refers to
         the Function SNES has just updated.
+
+        ``defer_hessian``: a smooth body's Hessian is computed only when :meth:`update_hessian`
+        asks for it (the pre-Jacobian hook), and the Hessian Function keeps its values until
+        then. The residual at the refreshed iterate does not depend on them: there δ = u − u_k
+        vanishes (to rounding: u_k is u evaluated at the same points), so g = g_k and n = n_k.
+        A Newton iteration evaluates the residual more often than the Jacobian (each line-search
+        trial, the converged iterate), so most refreshes skip the Hessian.
         """
         t0 = time.perf_counter()
         xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         uq = self._u_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         t1 = time.perf_counter()
         below = self._active_distance()
+        defer = defer_hessian and self.hessian is not None
+        points = xq if self._unique is None else xq[self._unique[0]]
+        d, nrm, hess = self._broad.query(self.body, points, self.normal, below, defer)
+        searched = len(points)
         if self._unique is not None:
-            first, inverse = self._unique
-            d, nrm, hess = self._broad.query(self.body, xq[first], self.normal, below)
-            searched = len(first)
-            d, nrm = d[inverse], nrm[inverse]
-            hess = None if hess is None else hess[inverse]
-        else:
-            d, nrm, hess = self._broad.query(self.body, xq, self.normal, below)
-            searched = len(d)
+            d, nrm = d[self._unique[1]], nrm[self._unique[1]]
         t2 = time.perf_counter()
         dofs = self._dofs
         self.gap.x.array[dofs] = d - self.offset + float(self.shrink.value)
         for k in range(3):
             self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
             self.u_k.x.array[3 * dofs + k] = uq[:, k]
-        if self.hessian is not None and hess is not None:
-            hess[self.gap.x.array[dofs] < -HESSIAN_DEPTH] = 0.0  # transient deep points
-            for k in range(9):
-                self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
-            self.hessian.x.scatter_forward()
+        deep = self.gap.x.array[dofs] < -HESSIAN_DEPTH  # transient deep points: no Hessian
+        self._pending = (hess, xq, deep) if defer else None
+        if not defer and hess is not None:
+            self._set_hessian(hess, deep)
         for f in (self.gap, self.normal_fn, self.u_k):
             f.x.scatter_forward()
         tm = self.timings
@@ -247,6 +253,36 @@ class ContactState:
         tm.points = len(d)
         tm.searched = round(searched * (1.0 - self._broad.skipped_fraction))
         tm.skipped_fraction = self._broad.skipped_fraction
+
+    def update_hessian(self) -> None:
+        """The Hessian of a refresh made with ``defer_hessian`` (a pre-Jacobian hook).
+
+        If the displacement has changed since that refresh, a full refresh at the current
+        iterate is made instead, so the Jacobian always gets the Hessian of its own iterate.
+        """
+        if self._pending is None:
+            return
+        later, x_at, deep = self._pending
+        t0 = time.perf_counter()
+        xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
+        if not np.array_equal(xq, x_at):
+            self.refresh()
+            return
+        self._set_hessian(later(), deep)
+        self._pending = None
+        self.timings.search_s += time.perf_counter() - t0
+
+    def _set_hessian(self, hess: F64, deep: npt.NDArray[np.bool_]) -> None:
+        """Write the Hessian of the searched points (one per distinct point) into its Function,
+        zero at the points deeper than HESSIAN_DEPTH."""
+        assert self.hessian is not None
+        if self._unique is not None:
+            hess = hess[self._unique[1]]
+        hess[deep] = 0.0
+        dofs = self._dofs
+        for k in range(9):
+            self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
+        self.hessian.x.scatter_forward()
 
     __call__ = refresh
 
