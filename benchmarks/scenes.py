@@ -118,11 +118,17 @@ def child(spec: dict) -> dict:
 
 
 def _speed_variant(spec: dict) -> None:
-    """The contact search as it was before the speed-ups of ``benchmarks/speed.py``, on request:
+    """The code as it was before the speed-ups of ``benchmarks/speed.py``, on request:
     ``share_points`` False searches all points of every cell (no point shared between cells);
-    ``contact_hessian`` "always" computes the smooth body's Hessian at every residual."""
+    ``contact_hessian`` "always" computes the smooth body's Hessian at every residual;
+    ``kinematics`` "matrix" writes the strains with 3×3 matrix products and R(θ)."""
     from fenics_garment.contact import shell, state
 
+    if spec.get("kinematics") == "matrix":
+        from benchmarks.speed import matrix_kinematics
+        from fenics_garment.shell import model
+
+        model.shell_kinematics = matrix_kinematics
     if spec.get("share_points") is False:
         state._unique_points = lambda *args: None
     if spec.get("contact_hessian") == "always":
