@@ -269,12 +269,21 @@ def kernels(say) -> dict:
 # --------------------------------------------------------------------------------------------
 def markdown(data: dict) -> str:
     """The per-iteration split of every scene run, the after/before ratios, the kernel table."""
+    lines = _scene_tables(data.get("scene", []))
+    earlier = data.get("scene_contact_only")
+    if earlier:
+        lines += ["", f"Earlier run, {earlier['note']}:", "", *_scene_tables(earlier["runs"])]
+    return "\n".join(lines + _other_tables(data))
+
+
+def _scene_tables(runs: list[dict]) -> list[str]:
+    """The split of each scene run, then the after/before ratios."""
     lines = ["| geometry | variant | dofs | Newton its (dressing / all) | residuals / it | "
              "Jacobian [ms/it] | "
              "residual [ms/it] | contact [ms/it] | linear [ms/it] | total [ms/it] | "
              "dressing [s] | force [N] |", "|---" * 12 + "|"]  # fmt: skip
     ratios = []
-    for r in data.get("scene", []):
+    for r in runs:
         if r["variant"] == "after/before":
             ratios.append(r)
             continue
@@ -300,6 +309,12 @@ def markdown(data: dict) -> str:
                          f"{r['dressing_ratio']:.2f} | {r['newton_its'][0]} → "
                          f"{r['newton_its'][1]} | {r['contact_force_rel_change']:.1e} | "
                          f"{r['p95_change_kPa']:.1e} |")  # fmt: skip
+    return lines
+
+
+def _other_tables(data: dict) -> list[str]:
+    """The kernel table, the verification table and the run notes."""
+    lines: list[str] = []
     k = data.get("kernels")
     if k:
         lines += [
@@ -330,7 +345,7 @@ def markdown(data: dict) -> str:
     meta = data.get("meta", {})
     if meta:
         lines += ["", "Run: " + ", ".join(f"{k} = {v}" for k, v in meta.items())]
-    return "\n".join(lines)
+    return lines
 
 
 def main(argv: list[str]) -> int:
