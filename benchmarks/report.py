@@ -149,6 +149,13 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
             parts += ["Faceted vs smooth body surface (`python -m benchmarks.smooth_body`).", ""]
             parts += [markdown(d), ""]
             continue
+        if name == "speed":  # per-iteration split before/after (benchmarks/speed.py)
+            from benchmarks.speed import markdown as speed_markdown
+
+            parts += ["Per-Newton-iteration time split of the cotton gilet, before and after the "
+                      "contact-search speed-ups, and kernel cost per cell "
+                      "(`python -m benchmarks.speed`).", "", speed_markdown(d), ""]  # fmt: skip
+            continue
         if meta:
             parts += ["Run: " + ", ".join(f"{k} = {v:.0f}" if isinstance(v, float) else
                                           f"{k} = {v}" for k, v in meta.items()), ""]  # fmt: skip

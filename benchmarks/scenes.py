@@ -86,6 +86,9 @@ def child(spec: dict) -> dict:
         phys = replace(phys, body_surface=spec["body_surface"])
     if "body_mesh_size" in spec:
         s = replace(s, body=replace(s.body, mesh_size=spec["body_mesh_size"]))
+    if "geometry" in spec:  # benchmarks/speed.py: straight or curved garment cells
+        g = replace(g, geometry=spec["geometry"])
+    _speed_variant(spec)
     s = replace(s, garment=g, physics=phys,
                 output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
     original = scene_build.build
@@ -112,6 +115,24 @@ def child(spec: dict) -> dict:
     if comm.rank == 0:
         shutil.rmtree(out, ignore_errors=True)  # summary.json etc.: only the record is kept
     return rec
+
+
+def _speed_variant(spec: dict) -> None:
+    """The code as it was before the speed-ups of ``benchmarks/speed.py``, on request:
+    ``share_points`` False searches all points of every cell (no point shared between cells);
+    ``contact_hessian`` "always" computes the smooth body's Hessian at every residual;
+    ``kinematics`` "matrix" writes the strains with 3×3 matrix products and R(θ)."""
+    from fenics_garment.contact import shell, state
+
+    if spec.get("kinematics") == "matrix":
+        from benchmarks.speed import matrix_kinematics
+        from fenics_garment.shell import model
+
+        model.shell_kinematics = matrix_kinematics
+    if spec.get("share_points") is False:
+        state._unique_points = lambda *args: None
+    if spec.get("contact_hessian") == "always":
+        shell.ShellContact.solver_hooks = lambda self: {"pre_residual": [self.refresh]}
 
 
 def _record(res, spec: dict, comm) -> dict:

@@ -3,7 +3,9 @@
 ``NonlinearSolver`` wraps ``dolfinx.fem.petsc.NonlinearProblem`` and adds what a garment run needs:
 
 * *pre-residual hooks* (e.g. refresh the contact gap from the current iterate) called with the
-  iterate already copied into the unknown Function,
+  iterate already copied into the unknown Function, and *pre-Jacobian hooks* likewise (e.g. the
+  contact's Hessian, needed by the Jacobian only: it is skipped at the residual evaluations that
+  no Jacobian follows — line-search trials, the converged iterate),
 * dead point loads added to the residual vector, scaled by the load factor λ,
 * a NaN/Inf check on every residual: PETSc's own norm check then ends the Newton solve with
   ``DIVERGED_FUNCTION_NANORINF`` (petsc4py 3.25 has no ``setFunctionDomainError``), so the load
@@ -112,8 +114,9 @@ def reason_name(reason: int) -> str:
 class Timings:
     """Wall-clock split, accumulated over a run.
 
-    ``solve`` is the wall time inside SNES and includes ``residual``, ``jacobian`` and ``hooks``
-    (``solve − residual − jacobian`` is the linear solver plus SNES overhead). ``predictor`` is
+    ``solve`` is the wall time inside SNES and includes ``residual`` and ``jacobian``
+    (``solve − residual − jacobian`` is the linear solver plus SNES overhead); ``residual``
+    includes the pre-residual ``hooks`` and ``jacobian`` the ``jacobian_hooks``. ``predictor`` is
     the load stepper's predictor (residual evaluations in it are counted in ``residual`` too).
     """
 
@@ -121,6 +124,7 @@ class Timings:
     residual: float = 0.0
     jacobian: float = 0.0
     hooks: float = 0.0
+    jacobian_hooks: float = 0.0
     solve: float = 0.0
     predictor: float = 0.0
     newton_iterations: int = 0
@@ -162,6 +166,7 @@ class NonlinearSolver:
         *,
         point_loads: list | None = None,
         pre_residual: list[Callable[[], None]] | None = None,
+        pre_jacobian: list[Callable[[], None]] | None = None,
         petsc_options: dict | None = None,
         prefix: str = "garment_",
         symmetric: bool | None = None,
@@ -172,6 +177,7 @@ class NonlinearSolver:
         self.model = model
         self.bcs = bcs
         self.hooks = list(pre_residual or [])
+        self.jacobian_hooks = list(pre_jacobian or [])
         self.timings = Timings()
         opts = dict(DEFAULT_SNES_OPTIONS)
         if symmetric is None:
@@ -333,7 +339,15 @@ class NonlinearSolver:
                 timings.nonfinite += 1
 
         def jacobian(snes_, x, J, P):
+            solver = this()
             t0 = time.perf_counter()
+            if solver.jacobian_hooks:
+                forward = PETSc.ScatterMode.FORWARD
+                dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, forward)
+                dolfinx.fem.petsc.assign(x, model.q)
+                for hook in solver.jacobian_hooks:
+                    hook()
+                timings.jacobian_hooks += time.perf_counter() - t0
             assemble_jacobian(snes_, x, J, P, **jctx)
             timings.jacobian_evaluations += 1
             timings.jacobian += time.perf_counter() - t0

@@ -26,6 +26,7 @@ AABB tree) is built once per scene; each rank queries only its own garment point
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -59,6 +60,7 @@ class ClosestPoints:
         normal: unit contact normal (outward, smoothed as chosen), shape (n, 3).
         hessian: the distance's Hessian, shape (n, 3, 3), for a smooth body
             (:class:`fenics_garment.contact.smooth.SmoothBody`); None for the faceted one.
+        hessian_later: a smooth body's Hessian on demand (``closest(defer_hessian=True)``).
     """
 
     distance: F64
@@ -66,6 +68,7 @@ class ClosestPoints:
     face: I64
     normal: F64
     hessian: F64 | None = None
+    hessian_later: Callable[[], F64] | None = None
 
 
 class SearchSurface:
@@ -141,6 +144,7 @@ class SearchSurface:
         normal: str = "phong",
         feature_tol: float = 1e-9,
         hessian_below: float = np.inf,
+        defer_hessian: bool = False,
     ) -> ClosestPoints:
         """Exact closest points, signed distances and contact normals.
 
@@ -150,7 +154,7 @@ class SearchSurface:
                 or ``"face"`` (raw facet normal, for comparison only).
             feature_tol: barycentric tolerance below which the closest point is taken to lie
                 on an edge or vertex (for the choice of pseudonormal).
-            hessian_below: unused here (a smooth body's Hessian, :mod:`.smooth`).
+            hessian_below, defer_hessian: unused here (a smooth body's Hessian, :mod:`.smooth`).
         """
         x = np.ascontiguousarray(np.asarray(points, dtype=np.float64).reshape(-1, 3))
         if len(x) == 0:
@@ -245,33 +249,47 @@ class BroadPhase:
     _n0: F64 | None = field(default=None, repr=False)
 
     def query(
-        self, body: SearchSurface, x: F64, normal: str = "phong", hessian_below: float = np.inf
-    ) -> tuple[F64, F64, F64 | None]:
+        self,
+        body: SearchSurface,
+        x: F64,
+        normal: str = "phong",
+        hessian_below: float = np.inf,
+        defer_hessian: bool = False,
+    ) -> tuple[F64, F64, F64 | Callable[[], F64] | None]:
         """Signed distance, normal and (smooth body) Hessian of every point of ``x``, searching
-        only the candidates; a skipped point keeps its last normal and gets a zero Hessian."""
+        only the candidates; a skipped point keeps its last normal and gets a zero Hessian.
+        With ``defer_hessian`` the Hessian is returned as a function that computes it."""
         n = len(x)
         if self._x0 is None or self._x0.shape != x.shape:
-            res = body.closest(x, normal, hessian_below=hessian_below)
+            res = body.closest(x, normal, hessian_below=hessian_below, defer_hessian=defer_hessian)
             self._x0, self._d0, self._n0 = x.copy(), res.distance.copy(), res.normal.copy()
             self.skipped_fraction = 0.0
-            return res.distance, res.normal, res.hessian
+            return res.distance, res.normal, res.hessian_later or res.hessian
         assert self._d0 is not None and self._n0 is not None
         bound = self._d0 - np.linalg.norm(x - self._x0, axis=1)
         near = bound <= self.band
         d = bound.copy()
         nrm = self._n0.copy()
-        hess = np.zeros((n, 3, 3)) if body.smooth else None
+        res = None
         if near.any():
-            res = body.closest(x[near], normal, hessian_below=hessian_below)
+            res = body.closest(x[near], normal, hessian_below=hessian_below,
+                               defer_hessian=defer_hessian)  # fmt: skip
             d[near] = res.distance
             nrm[near] = res.normal
-            if hess is not None:
-                hess[near] = res.hessian
             self._x0[near] = x[near]
             self._d0[near] = res.distance
             self._n0[near] = res.normal
         self.skipped_fraction = float(1.0 - near.sum() / n) if n else 0.0
-        return d, nrm, hess
+        if not body.smooth:
+            return d, nrm, None
+
+        def hessian() -> F64:
+            hess = np.zeros((n, 3, 3))
+            if res is not None:
+                hess[near] = res.hessian if res.hessian_later is None else res.hessian_later()
+            return hess
+
+        return d, nrm, hessian if defer_hessian else hessian()
 
     def memory(self) -> dict[str, F64]:
         """The last exact search: points ``x0``, distances ``d0`` and normals ``n0`` (empty

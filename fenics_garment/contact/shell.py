@@ -3,11 +3,11 @@
 :func:`attach` builds the state on ``model.u`` (the displacement part of the mixed unknown), adds
 the contact virtual work R_c(v) = −∫ t_N n·v_u dA (at the contact points) to the model's residual
 (as a builder: made from the contact's laws when the residual is) and returns a
-:class:`ShellContact` whose ``refresh`` is the pre-residual hook of
+:class:`ShellContact` whose ``solver_hooks`` are the pre-residual and pre-Jacobian hooks of
 :class:`fenics_garment.solve.NonlinearSolver`::
 
     contact = attach(model, body, kappa_hat=10.0)
-    solver = NonlinearSolver(model, bcs, pre_residual=[contact.refresh])
+    solver = NonlinearSolver(model, bcs, **contact.solver_hooks())
 
 The penalty κ is a ``fem.Constant``: changing it (or the material) does not recompile the form.
 
@@ -21,7 +21,9 @@ the body and the pressure is −64 % off; ``"vertex+edge"`` (equal weights) −3
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import laws, pressure, terms
@@ -67,9 +69,21 @@ class ShellContact:
     def friction(self, friction: terms.Friction | None) -> None:
         self.state.friction = friction
 
-    def refresh(self) -> None:
-        """Pre-residual hook: gap, normal and u_k at the current iterate."""
-        self.state.refresh()
+    def refresh(self, defer_hessian: bool = False) -> None:
+        """Pre-residual hook: gap, normal and u_k at the current iterate (see
+        :meth:`ContactState.refresh`)."""
+        self.state.refresh(defer_hessian=defer_hessian)
+
+    def update_hessian(self) -> None:
+        """Pre-Jacobian hook: the smooth body's Hessian at the iterate of the last refresh."""
+        self.state.update_hessian()
+
+    def solver_hooks(self) -> dict[str, list[Callable[[], None]]]:
+        """``NonlinearSolver`` hooks: refresh before each residual, the Hessian (which only the
+        Jacobian needs) before each Jacobian. The same Newton iterates as refreshing it always.
+        """
+        refresh = partial(self.refresh, defer_hessian=True)
+        return {"pre_residual": [refresh], "pre_jacobian": [self.update_hessian]}
 
     def accept_step(self) -> None:
         """After a converged load step: friction's anchor moves by the plastic slip only."""

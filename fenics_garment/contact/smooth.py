@@ -32,6 +32,8 @@ pseudonormal sign stays the robust inside/outside test.
 
 from __future__ import annotations
 
+from collections.abc import Callable
+
 import numpy as np
 import numpy.typing as npt
 from scipy.sparse import csr_matrix
@@ -136,17 +138,14 @@ def _cap_curvature(s: F64, kmax: float) -> F64:
     return np.einsum("nij,nj,nkj->nik", vec, np.clip(lam, -kmax, kmax), vec)
 
 
-def _weights(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float) -> dict[str, F64]:
-    """Per-neighbour quantities (flat, CSR order) shared by f, ∇f and ∇∇f (see :func:`_imls`)."""
-    y = x[rows.row] - p
-    rho = np.linalg.norm(y, axis=1)
-    t = rho / r
-    om = np.clip(1.0 - t, 0.0, None)
-    z = np.einsum("ki,ki->k", n, y)
+def _weights(y: F64, rho: F64, n: F64, s: F64, r: float, w: F64, z: F64) -> dict[str, F64]:
+    """Per-neighbour quantities (flat, CSR order) shared by f, ∇f and ∇∇f (see :func:`_imls`),
+    from the offsets y = x − p to the neighbours, ρ = |y|, w = φ(ρ/r) and z = n·y."""
+    om = np.clip(1.0 - rho / r, 0.0, None)
     sig = np.einsum("kij,kj->ki", s, y)
     sig2 = np.einsum("ki,ki->k", sig, sig)
     q = dict(y=y, rho=rho, om=om, z=z, sig=sig, sig2=sig2, n=n)
-    q["w"] = wendland(t)
+    q["w"] = w
     q["a"] = z + 0.5 * np.einsum("ki,ki->k", y, sig) - 0.5 * z * sig2
     q["ssig"] = np.einsum("kij,kj->ki", s, sig)
     q["ga"] = n + sig - 0.5 * sig2[:, None] * n - z[:, None] * q["ssig"]
@@ -154,31 +153,41 @@ def _weights(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float) -> dict[str,
     return q
 
 
-def _hessian(q: dict[str, F64], k: npt.NDArray[np.bool_], c: F64, w: F64, sub: _Rows, r: float,
-             grad: F64, sums: tuple[F64, F64]) -> F64:  # fmt: skip
-    """W ∇∇f at the points of ``sub`` (their neighbours: the entries ``k``), see :func:`_imls`.
+def _hessian(q: dict[str, F64], k: npt.NDArray[np.bool_] | None, c: F64, w: F64, sub: _Rows,
+             r: float, grad: F64, sums: tuple[F64, F64]) -> F64:  # fmt: skip
+    """W ∇∇f at the points of ``sub`` (their neighbours: the entries ``k``, None: all), see
+    :func:`_imls`.
 
     The symmetric outer-product terms are written as M + Mᵀ with
     M = Σ y ⊗ (½ α y + β ∇a) − Σ n ⊗ w Sσ, α = 60 (1−t)² (a − f)/(r³ ρ), β = −20 (1−t)³/r²;
     ``sums`` = (Σ w S, Σ w z S²) per point.
     """
-    y, om, rho, ck = q["y"][k], q["om"][k], q["rho"][k], c[k]
+
+    def pick(a: F64) -> F64:
+        return a if k is None else a[k]
+
+    y, om, rho, ck = pick(q["y"]), pick(q["om"]), pick(q["rho"]), pick(c)
     alpha = 60.0 * om**2 / (r**3 * np.where(rho > 0.0, rho, 1.0)) * ck
     beta = -20.0 * om**3 / r**2
-    v = 0.5 * alpha[:, None] * y + beta[:, None] * q["ga"][k]
-    u = -w[k][:, None] * q["ssig"][k]
-    m = sub.sum(y[:, :, None] * v[:, None, :] + q["n"][k][:, :, None] * u[:, None, :])
+    v = 0.5 * alpha[:, None] * y + beta[:, None] * pick(q["ga"])
+    u = -pick(w)[:, None] * pick(q["ssig"])
+    outer = y[:, :, None] * v[:, None, :]
+    outer += pick(q["n"])[:, :, None] * u[:, None, :]
+    m = sub.sum(outer)
     h = m + m.transpose(0, 2, 1) + sums[0] - sums[1]
     h += sub.sum(beta * ck)[:, None, None] * np.eye(3)
     gW = sub.sum(beta[:, None] * y)
     return h - np.einsum("mi,mj->mij", grad, gW) - np.einsum("mi,mj->mij", gW, grad)
 
 
-def _imls(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float,
-          hessian: npt.NDArray[np.bool_], vertex_terms) -> tuple[F64, F64, F64, F64]:  # fmt: skip
-    """f, ∇f, ∇∇f and W = Σw at x (m, 3) from the neighbours (p, n, S) of each point, given as
-    flat (nnz, …) arrays in the order of ``rows``; ∇∇f only at the points where ``hessian``
-    (zero elsewhere). ``vertex_terms(k)`` gives (Σ w S, Σ w z S²) over the entries k.
+def _imls(y: F64, rho: F64, n: F64, s: F64, rows: _Rows, r: float, hessian: npt.NDArray[np.bool_],
+          vertex_terms, w: F64, z: F64) -> tuple[F64, F64, Callable[[], F64], F64]:  # fmt: skip
+    """f, ∇f, ∇∇f and W = Σw at the points of ``rows`` from the offsets y = x − p to their
+    neighbours p, ρ = |y|, w = φ(ρ/r), z = n·y and the neighbours' normals n and shape
+    operators S, given as flat (nnz, …) arrays in the order of ``rows``; ∇∇f only at the points
+    where ``hessian`` (zero elsewhere). ``vertex_terms(k)`` gives (Σ w S, Σ w z S²) over the
+    entries k (None: all). ∇∇f is returned as a function that computes it from the quantities
+    f and ∇f were computed from (when called: the Newton residual needs f and ∇f only).
 
     Per sample, with z = n·y and σ = S y:  a = z + ½ y·σ − ½ z |σ|²,
     ∇a = n + σ − ½ |σ|² n − z Sσ,  ∇∇a = S − n ⊗ Sσ − Sσ ⊗ n − z S²;
@@ -186,20 +195,27 @@ def _imls(x: F64, p: F64, n: F64, s: F64, rows: _Rows, r: float,
     f = Σ w a / W:  ∇f = [Σ ∇w (a − f) + Σ w ∇a] / W,
     ∇∇f = [Σ ∇∇w (a − f) + Σ (∇w ⊗ ∇a + ∇a ⊗ ∇w) − ∇f ⊗ ∇W − ∇W ⊗ ∇f + Σ w ∇∇a] / W.
     """
-    q = _weights(x, p, n, s, rows, r)
-    w, gw = q["w"], q["gw"]
+    q = _weights(y, rho, n, s, r, w, z)
+    gw = q["gw"]
     wsum = rows.sum(w)
     W = np.where(wsum > 0.0, wsum, 1.0)
     f = rows.sum(w * q["a"]) / W
     c = q["a"] - f[rows.row]
     grad = rows.sum(gw * c[:, None] + w[:, None] * q["ga"]) / W[:, None]
-    hess = np.zeros((len(x), 3, 3))
-    if hessian.any():
-        k = hessian[rows.row]
-        sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[hessian])
-        hess[hessian] = (
-            _hessian(q, k, c, w, sub, r, grad[hessian], vertex_terms(k)) / W[hessian][:, None, None]
-        )
+
+    def hess() -> F64:
+        out = np.zeros((rows.m, 3, 3))
+        if hessian.all():  # every point: no subsets to gather (the same sums)
+            out[:] = _hessian(q, None, c, w, rows, r, grad, vertex_terms(None)) / W[:, None, None]
+        elif hessian.any():
+            k = hessian[rows.row]
+            sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[hessian])
+            out[hessian] = (
+                _hessian(q, k, c, w, sub, r, grad[hessian], vertex_terms(k))
+                / W[hessian][:, None, None]
+            )
+        return out
+
     return f, grad, hess, wsum
 
 
@@ -273,20 +289,29 @@ class SmoothBody(SearchSurface):
     ) -> tuple[F64, F64, F64, F64]:
         """f, ∇f, ∇∇f (where ``hessian``, default everywhere; zero elsewhere) and Σw of the
         IMLS function at x (m, 3)."""
+        f, g, h, wsum = self._smooth_distance(x, hessian)
+        return f, g, h(), wsum
+
+    def _smooth_distance(
+        self, x: F64, hessian: npt.NDArray[np.bool_] | None = None
+    ) -> tuple[F64, F64, Callable[[], F64], F64]:
+        """:meth:`smooth_distance` with ∇∇f as a function computing it on demand."""
         m = len(x)
         need = np.ones(m, dtype=bool) if hessian is None else hessian
         j, counts = self._cached_balls(x)
         r = self.support_radius
-        within = np.linalg.norm(x[np.repeat(np.arange(m), counts)] - self.vertices[j], axis=1) < r
-        j = j[within]  # the vertices of nonzero weight, in index order: the same sums whether
-        rows = _Rows(np.bincount(np.repeat(np.arange(m), counts)[within], minlength=m))  # cached
-        p, n = self.vertices[j], self.vertex_normals[j]
-        y = x[rows.row] - p
-        w = wendland(np.linalg.norm(y, axis=1) / r)
+        y = x[np.repeat(np.arange(m), counts)] - self.vertices[j]
+        rho = np.linalg.norm(y, axis=1)
+        within = rho < r
+        j, y, rho = j[within], y[within], rho[within]  # the vertices of nonzero weight, in
+        rows = _Rows(np.bincount(np.repeat(np.arange(m), counts)[within], minlength=m))  # index
+        n = self.vertex_normals[j]  # order: the same sums whether the balls were cached or not
+        w = wendland(rho / r)
         z = np.einsum("ki,ki->k", n, y)
 
-        def vertex_terms(k: npt.NDArray[np.bool_]) -> tuple[F64, F64]:
+        def vertex_terms(k: npt.NDArray[np.bool_] | None) -> tuple[F64, F64]:
             """(Σ w S, Σ w z S²) per point over the entries k: sparse products, no 3×3 loops."""
+            k = slice(None) if k is None else k
             sub_rows = (np.cumsum(need) - 1)[rows.row[k]]
             shape = (int(need.sum()), len(self.vertices))
             mw = csr_matrix((w[k], (sub_rows, j[k])), shape=shape)
@@ -296,7 +321,7 @@ class SmoothBody(SearchSurface):
                 (mz @ self._shape2.reshape(-1, 9)).reshape(-1, 3, 3),
             )
 
-        return _imls(x, p, n, self.shape[j], rows, r, need, vertex_terms)
+        return _imls(y, rho, n, self.shape[j], rows, r, need, vertex_terms, w, z)
 
     def closest(
         self,
@@ -304,23 +329,37 @@ class SmoothBody(SearchSurface):
         normal: str = "gradient",
         feature_tol: float = 1e-9,
         hessian_below: float = np.inf,
+        defer_hessian: bool = False,
     ) -> ClosestPoints:
         """Faceted closest point, face and sign; IMLS distance, gradient and Hessian in the band.
 
         ``normal`` is ignored inside the band (the normal there is ∇f, consistent with f). The
         Hessian is computed only where f < ``hessian_below`` (the contact-active points: the
         contact terms need it nowhere else; computed with a slack) and is zero elsewhere.
+        ``defer_hessian``: ``hessian`` is left None and ``hessian_later()`` computes it (the
+        same values, from the quantities kept from this search).
         """
         res = super().closest(points, normal, feature_tol)
-        hess = np.zeros((len(res.distance), 3, 3))
+        n_points = len(res.distance)
         near = np.flatnonzero(np.abs(res.distance) <= self.band)
+        h: Callable[[], F64] | None = None
+        ok = np.zeros(0, dtype=bool)
         if len(near):
             x = np.asarray(points, dtype=np.float64).reshape(-1, 3)[near]
             active = res.distance[near] < hessian_below + HESSIAN_SLACK * self.support_radius
-            f, g, h, wsum = self.smooth_distance(x, active)
+            f, g, h, wsum = self._smooth_distance(x, active)
             ok = wsum > 0.0
             res.distance[near[ok]] = f[ok]
             res.normal[near[ok]] = g[ok]
-            hess[near[ok]] = h[ok]
-        res.hessian = hess
+
+        def hessian() -> F64:
+            hess = np.zeros((n_points, 3, 3))
+            if h is not None:
+                hess[near[ok]] = h()[ok]
+            return hess
+
+        if defer_hessian:
+            res.hessian_later = hessian
+        else:
+            res.hessian = hessian()
         return res

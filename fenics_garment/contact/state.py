@@ -83,6 +83,50 @@ def contact_rule(rule: str, cell: str = "triangle") -> tuple[F64, F64]:
     return pts, np.full(len(pts), volume / len(pts))
 
 
+def _point_keys(mesh: dolfinx.mesh.Mesh, cells: npt.NDArray[np.int32], rule: str,
+                n_points: int) -> npt.NDArray[np.int64] | None:  # fmt: skip
+    """One integer per contact point (cells × points of the rule): equal for the same point.
+
+    The nodal rules' points are cell vertices, then edge midpoints in the reference cell's edge
+    order (:func:`contact_rule`), then (``"lumped"``) the centroid. DOLFINx numbers a cell's
+    vertices and edges in that same reference order, so a point shared by two cells gets the
+    vertex or edge index as its key: vertex v → v, edge e → n_v + e, centroid of cell c →
+    n_v + n_e + c. ``None`` for the Gauss rules (no point is shared).
+
+    The garment's position x = X + u is continuous, so both cells of a shared point give the
+    same x (to rounding: the two cells' basis functions are evaluated separately).
+    """
+    if rule not in ("vertex", "vertex+edge", "lumped"):
+        return None
+    top, tdim = mesh.topology, mesh.topology.dim
+    reference = basix.topology(getattr(basix.CellType, top.cell_name()))
+    n_vertices, n_edges = len(reference[0]), len(reference[1])
+    vertices = top.connectivity(tdim, 0).array.reshape(-1, n_vertices)[cells]
+    keys = [vertices.astype(np.int64)]
+    n_v = top.index_map(0).size_local + top.index_map(0).num_ghosts
+    if rule != "vertex":
+        top.create_connectivity(tdim, 1)
+        edges = top.connectivity(tdim, 1).array.reshape(-1, n_edges)
+        keys.append(n_v + edges[cells].astype(np.int64))
+        n_e = top.index_map(1).size_local + top.index_map(1).num_ghosts
+        if rule == "lumped":
+            keys.append((n_v + n_e + cells.astype(np.int64))[:, None])
+    out = np.hstack(keys)
+    if out.shape[1] != n_points:  # pragma: no cover - a rule whose layout is not the above
+        raise ValueError(f"contact rule {rule!r}: {n_points} points, {out.shape[1]} keys")
+    return out
+
+
+def _unique_points(mesh: dolfinx.mesh.Mesh, cells: npt.NDArray[np.int32], rule: str,
+                   n_points: int) -> tuple[np.ndarray, np.ndarray] | None:  # fmt: skip
+    """(first, inverse): the contact points searched (one per distinct point, the first cell's
+    copy) and, for every point, which of them it is; ``None`` when no point is shared."""
+    keys = _point_keys(mesh, cells, rule, n_points)
+    if keys is None:
+        return None
+    return np.unique(keys.ravel(), return_index=True, return_inverse=True)[1:]
+
+
 @dataclass
 class SearchTimings:
     """Accumulated wall time [s] and call counts of the refresh."""
@@ -160,15 +204,8 @@ class ContactState:
         self._cells = np.arange(n_owned, dtype=np.int32)
         self._dofs = self.Qs.dofmap.list[self._cells].ravel()
         self._broad = BroadPhase(band=band)
-        self._unique: tuple[np.ndarray, np.ndarray] | None = None
-        gdofs = mesh.geometry.dofmaps[0]
-        n_nodal = {"vertex": 3, "vertex+edge": 6, "lumped": 6}.get(rule, 0)
-        if 0 < n_nodal <= gdofs.shape[1]:  # points at geometry nodes: search each node once
-            nodes = gdofs[self._cells][:, :n_nodal]
-            if len(self.points) > n_nodal:  # the centroid: one point per cell
-                centre = len(mesh.geometry.x) + self._cells[:, None]
-                nodes = np.hstack([nodes, centre])
-            self._unique = np.unique(nodes.ravel(), return_index=True, return_inverse=True)[1:]
+        self._unique = _unique_points(mesh, self._cells, rule, len(self.points))
+        self._pending: tuple | None = None  # a deferred Hessian (refresh)
         self.timings = SearchTimings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
@@ -177,37 +214,42 @@ class ContactState:
         self._compiled: dict[tuple, dolfinx.fem.Expression] = {}  # see evaluate()
 
     # -- the pre-residual hook ------------------------------------------------------------------
-    def refresh(self, _: dolfinx.fem.Function | None = None) -> None:
+    def refresh(
+        self, _: dolfinx.fem.Function | None = None, *, defer_hessian: bool = False
+    ) -> None:
         """Recompute gap, normal and u_k from the current displacement (a pre-residual hook).
 
         The argument is ignored: the state evaluates its own ``u`` expression, which refers to
         the Function SNES has just updated.
+
+        ``defer_hessian``: a smooth body's Hessian is computed only when :meth:`update_hessian`
+        asks for it (the pre-Jacobian hook), and the Hessian Function keeps its values until
+        then. The residual at the refreshed iterate does not depend on them: there δ = u − u_k
+        vanishes (to rounding: u_k is u evaluated at the same points), so g = g_k and n = n_k.
+        A Newton iteration evaluates the residual more often than the Jacobian (each line-search
+        trial, the converged iterate), so most refreshes skip the Hessian.
         """
         t0 = time.perf_counter()
         xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         uq = self._u_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         t1 = time.perf_counter()
         below = self._active_distance()
+        defer = defer_hessian and self.hessian is not None
+        points = xq if self._unique is None else xq[self._unique[0]]
+        d, nrm, hess = self._broad.query(self.body, points, self.normal, below, defer)
+        searched = len(points)
         if self._unique is not None:
-            first, inverse = self._unique
-            d, nrm, hess = self._broad.query(self.body, xq[first], self.normal, below)
-            searched = len(first)
-            d, nrm = d[inverse], nrm[inverse]
-            hess = None if hess is None else hess[inverse]
-        else:
-            d, nrm, hess = self._broad.query(self.body, xq, self.normal, below)
-            searched = len(d)
+            d, nrm = d[self._unique[1]], nrm[self._unique[1]]
         t2 = time.perf_counter()
         dofs = self._dofs
         self.gap.x.array[dofs] = d - self.offset + float(self.shrink.value)
         for k in range(3):
             self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
             self.u_k.x.array[3 * dofs + k] = uq[:, k]
-        if self.hessian is not None and hess is not None:
-            hess[self.gap.x.array[dofs] < -HESSIAN_DEPTH] = 0.0  # transient deep points
-            for k in range(9):
-                self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
-            self.hessian.x.scatter_forward()
+        deep = self.gap.x.array[dofs] < -HESSIAN_DEPTH  # transient deep points: no Hessian
+        self._pending = (hess, xq, deep) if defer else None
+        if not defer and hess is not None:
+            self._set_hessian(hess, deep)
         for f in (self.gap, self.normal_fn, self.u_k):
             f.x.scatter_forward()
         tm = self.timings
@@ -217,6 +259,36 @@ class ContactState:
         tm.points = len(d)
         tm.searched = round(searched * (1.0 - self._broad.skipped_fraction))
         tm.skipped_fraction = self._broad.skipped_fraction
+
+    def update_hessian(self) -> None:
+        """The Hessian of a refresh made with ``defer_hessian`` (a pre-Jacobian hook).
+
+        If the displacement has changed since that refresh, a full refresh at the current
+        iterate is made instead, so the Jacobian always gets the Hessian of its own iterate.
+        """
+        if self._pending is None:
+            return
+        later, x_at, deep = self._pending
+        t0 = time.perf_counter()
+        xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
+        if not np.array_equal(xq, x_at):
+            self.refresh()
+            return
+        self._set_hessian(later(), deep)
+        self._pending = None
+        self.timings.search_s += time.perf_counter() - t0
+
+    def _set_hessian(self, hess: F64, deep: npt.NDArray[np.bool_]) -> None:
+        """Write the Hessian of the searched points (one per distinct point) into its Function,
+        zero at the points deeper than HESSIAN_DEPTH."""
+        assert self.hessian is not None
+        if self._unique is not None:
+            hess = hess[self._unique[1]]
+        hess[deep] = 0.0
+        dofs = self._dofs
+        for k in range(9):
+            self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
+        self.hessian.x.scatter_forward()
 
     __call__ = refresh
 

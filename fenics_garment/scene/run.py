@@ -457,7 +457,7 @@ def solve_stage(
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
-    solver = NonlinearSolver(built.model, built.bcs, pre_residual=[built.contact.refresh],
+    solver = NonlinearSolver(built.model, built.bcs, **built.contact.solver_hooks(),
                              petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0

@@ -61,6 +61,20 @@ def rotation_matrix(theta: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
     return ufl.Identity(3) + c1 * T + c2 * T * T
 
 
+def rotate(theta: ufl.core.expr.Expr, v: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+    """R(θ) v without forming R: v + c₁ θ×v + c₂ (θ(θ·v) − |θ|² v), since θ̂v = θ×v and
+    θ̂²v = θ×(θ×v) = θ(θ·v) − |θ|² v; c₁, c₂ as in :func:`rotation_matrix` (same branches).
+
+    Equal to ``rotation_matrix(theta) * v`` to rounding; its derivatives are cheaper (no 3×3
+    products with zero entries to expand), which is what the Jacobian kernel pays for.
+    """
+    a2 = ufl.dot(theta, theta)
+    a = ufl.sqrt(a2 + ufl.conditional(ufl.lt(a2, _SMALL), 1.0, 0.0))
+    c1 = ufl.conditional(ufl.lt(a2, _SMALL), 1 - a2 / 6 + a2**2 / 120, ufl.sin(a) / a)
+    c2 = ufl.conditional(ufl.lt(a2, _SMALL), 0.5 - a2 / 24 + a2**2 / 720, (1 - ufl.cos(a)) / a2)
+    return v + c1 * ufl.cross(theta, v) + c2 * (ufl.dot(theta, v) * theta - a2 * v)
+
+
 @dataclass(frozen=True)
 class ShellGeometry:
     """What the shell needs to know about its reference surface, computed from the mesh."""
@@ -125,26 +139,35 @@ class ShellKinematics:
 def shell_kinematics(
     geometry: ShellGeometry, u: ufl.core.expr.Expr, theta: ufl.core.expr.Expr
 ) -> ShellKinematics:
-    """Membrane, bending, shear and drilling strains of the displacement u and rotation θ."""
+    """Membrane, bending, shear and drilling strains of the displacement u and rotation θ.
+
+    Written with the deformed tangent vectors F e_α and the director's derivatives ∇d e_α
+    (ε_αβ = ½(F e_α·F e_β − δ_αβ), κ_αβ = sym(F e_α·∇d e_β) − …, γ_α = F e_α·d − e_α·d₀) and
+    with :func:`rotate` instead of the matrix R: the same strains as the matrix products of
+    the module docstring, to rounding (3e-16 relative on a residual and a Jacobian product at
+    rotations ≈ 0.3 rad), in kernels FFCx makes cheaper — measured on a P2B-P2B cylinder patch
+    (16×16, order-2 geometry, interleaved assemblies, CPU time): Jacobian 0.75× (median of 15),
+    residual 0.68×.
+    """
     n = geometry.normal
     P = tangent_projector(n)
     e1, e2 = geometry.frame()
     e = (e1, e2)
     d0 = geometry.d0
     F = P + ufl.grad(u)
-    R = rotation_matrix(theta)
-    d = R * d0
-
-    C = F.T * F
-    eps = ufl.as_matrix([[0.5 * (ufl.dot(ea, C * eb) - (1.0 if a == b else 0.0)) for b, eb in
-                          enumerate(e)] for a, ea in enumerate(e)])  # fmt: skip
-    Fd = F.T * ufl.grad(d)
+    d = rotate(theta, d0)
+    Fe = (F * e1, F * e2)
+    gd = ufl.grad(d)
+    gde = (gd * e1, gd * e2)
     Pd0 = P * ufl.grad(d0)
+    eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - (1.0 if a == b else 0.0))
+                          for b in range(2)] for a in range(2)])  # fmt: skip
     kap = ufl.as_matrix(
-        [[0.5 * (ufl.dot(ea, Fd * eb) + ufl.dot(eb, Fd * ea))
-          - 0.5 * (ufl.dot(ea, Pd0 * eb) + ufl.dot(eb, Pd0 * ea)) for eb in e] for ea in e]
+        [[0.5 * (ufl.dot(Fe[a], gde[b]) + ufl.dot(Fe[b], gde[a]))
+          - 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a])) for b in range(2)]
+         for a in range(2)]
     )  # fmt: skip
-    gam = ufl.as_vector([ufl.dot(F * ea, d) - ufl.dot(ea, d0) for ea in e])
-    drill = 0.5 * (ufl.dot(R * e1, F * e2) - ufl.dot(R * e2, F * e1))
-    return ShellKinematics(F=F, R=R, d=d, e1=e1, e2=e2, membrane=eps, bending=kap, shear=gam,
-                           drilling=drill)  # fmt: skip
+    gam = ufl.as_vector([ufl.dot(Fe[a], d) - ufl.dot(e[a], d0) for a in range(2)])
+    drill = 0.5 * (ufl.dot(rotate(theta, e1), Fe[1]) - ufl.dot(rotate(theta, e2), Fe[0]))
+    return ShellKinematics(F=F, R=rotation_matrix(theta), d=d, e1=e1, e2=e2, membrane=eps,
+                           bending=kap, shear=gam, drilling=drill)  # fmt: skip

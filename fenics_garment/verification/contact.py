@@ -148,7 +148,7 @@ def cap_pressure(R_c: float, r0: float, s, *, bending: bool = True) -> float:
 def _solver(model, bcs, contact, options):
     opts = {"snes_rtol": 1e-10, "snes_atol": 1e-10, "snes_stol": 0.0, "snes_max_it": 30}
     opts.update(options or {})
-    return NonlinearSolver(model, bcs, pre_residual=[contact.refresh], petsc_options=opts,
+    return NonlinearSolver(model, bcs, **contact.solver_hooks(), petsc_options=opts,
                            prefix=f"contact{id(model)}_")  # fmt: skip
 
 
