@@ -159,7 +159,16 @@ class _Frames:
         # abort the process. So its files are emptied (which frees their space although
         # ADIOS2 keeps them open), it is closed, and the partial series removed; a writer that
         # cannot even close then is kept alive (with its emptied folder) until the process ends.
+        self.discard(comm)
+        raise output.OutputError(message)
+
+    def discard(self, comm: MPI.Comm) -> None:
+        """Remove the partial series after another file failed (collective): its files are
+        emptied first (the disk may be full), the writer closed, the folder removed; a writer
+        that cannot close is kept alive with its folder, as in :meth:`_guarded`."""
         writer, self.writer = self.writer, None
+        if writer is None:
+            return
         if comm.rank == 0:
             _empty(self.tmp)
         comm.Barrier()
@@ -171,7 +180,6 @@ class _Frames:
             closed = False
         if comm.allreduce(closed, op=MPI.LAND) and comm.rank == 0:
             shutil.rmtree(self.tmp, ignore_errors=True)
-        raise output.OutputError(message)
 
     def close(self, comm: MPI.Comm) -> None:
         if self.writer is None:
@@ -469,8 +477,12 @@ def solve_stage(
         say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
             f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
     ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0)
-    report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
-                                        progress, first_step, say)  # fmt: skip
+    try:
+        report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
+                                            progress, first_step, say)  # fmt: skip
+    except output.OutputError:
+        frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
+        raise
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
