@@ -5,10 +5,10 @@ gives what computing it at every refresh gives, checked against independent refe
   bit, and both match the exact distance Hessian (I − e⊗e)/|x| of the sphere |x| = R to the body
   mesh's discretisation error; when the displacement has changed since the deferred refresh, the
   Hessian is that of the current iterate (a full refresh there).
-* Solver level, the tight spherical cap of ``contact.scenes`` on the smooth body: the same Newton
-  iteration counts and pressures as a solver that refreshes the Hessian at every residual, and
-  the pressure of Laplace's law for the cap (``scenes.cap_pressure``) to 2 % (pure penalty, no
-  multiplier updates: the penalty's own error is −1.7 % here).
+* Solver level, the tight spherical cap of ``verification.contact`` on the smooth body: the
+  same Newton iteration counts and pressures as a solver that refreshes the Hessian at every
+  residual, and the pressure of Laplace's law for the cap (``cap_pressure``) to 2 % (pure
+  penalty, no multiplier updates: the penalty's own error is −1.7 % here).
 """
 
 import numpy as np
@@ -64,9 +64,9 @@ def test_deferred_hessian_is_the_hessian_of_its_iterate():
 
 
 def test_cap_newton_is_unchanged_by_the_deferral():
-    from fenics_garment.contact import scenes
     from fenics_garment.materials import Isotropic
     from fenics_garment.solve import NonlinearSolver
+    from fenics_garment.verification import contact as scenes
 
     material = Isotropic(E=1.0e6, nu=0.3, thickness=1.0e-3)
     runs = []
@@ -77,7 +77,7 @@ def test_cap_newton_is_unchanged_by_the_deferral():
             scene.solver = NonlinearSolver(scene.model, scene.bcs, petsc_options=opts,
                                            pre_residual=[scene.contact.refresh],
                                            prefix="always_")  # fmt: skip
-        rep = scenes.dress(scene)
+        rep = scenes.dress_case(scene)
         runs.append((rep.iterations, scenes.mid_pressure(scene), scene.solver.timings))
     (its_d, p_d, t_d), (its_a, p_a, _) = runs
     print(f"\ndeferred Hessian: its {its_d}, p {p_d:.6f} Pa; always: its {its_a}, p {p_a:.6f} Pa; "
