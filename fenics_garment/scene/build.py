@@ -223,7 +223,7 @@ def tissue_stiffness(scene: Scene) -> float | None:
     if b.tissue == "soft" and scene.physics.contact != "penalty":
         # also for a Scene made in Python (the loader checks files): the multipliers would
         # remove the layer's compression and give the rigid body's pressure without a word
-        msg = "a soft body's tissue is the contact law: use contact = \"penalty\""
+        msg = 'a soft body\'s tissue is the contact law: use contact = "penalty"'
         raise SceneError(scene.source, "physics.contact", msg)
     return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
 
