@@ -217,14 +217,10 @@ def tissue_stiffness(scene: Scene) -> float | None:
     :class:`~fenics_garment.contact.terms.SoftTissue` with the seed paper's Table 1 modulus and
     Poisson ratio over ``body.tissue_depth``; None for a rigid body (the numerical penalty)."""
     from fenics_garment.contact.terms import SoftTissue
-    from fenics_garment.scene.config import SceneError
+    from fenics_garment.scene.config import check_tissue_law
 
+    check_tissue_law(scene)  # also for a Scene made in Python (the loader checks files)
     b = scene.body
-    if b.tissue == "soft" and scene.physics.contact != "penalty":
-        # also for a Scene made in Python (the loader checks files): the multipliers would
-        # remove the layer's compression and give the rigid body's pressure without a word
-        msg = 'a soft body\'s tissue is the contact law: use contact = "penalty"'
-        raise SceneError(scene.source, "physics.contact", msg)
     return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
 
 

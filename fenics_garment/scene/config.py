@@ -317,6 +317,15 @@ def _from_table(cls: type, table: dict, where: str, src: str) -> Any:
 # ------------------------------------------------------------------------------------------------
 
 
+def check_tissue_law(s: Scene) -> None:
+    """A soft body's tissue is the contact law (its Winkler stiffness is the penalty): the
+    augmented Lagrangian would remove the layer's compression and give the rigid pressure.
+    Called by the loader and by ``scene.build`` (for scenes made in Python)."""
+    ok = s.body.tissue != "soft" or s.physics.contact == "penalty"
+    _require(ok, s.source, "physics.contact",
+             "a soft body's tissue is the contact law: use contact = \"penalty\"")  # fmt: skip
+
+
 def _require(ok: bool, src: str, key: str, message: str) -> None:
     if not ok:
         raise SceneError(src, key, message)
@@ -367,8 +376,7 @@ def _check(s: Scene) -> None:
     _one_of(b.tissue, TISSUES, src, "body.tissue")
     _require(b.tissue_depth > 0, src, "body.tissue_depth",
              f"must be positive, got {b.tissue_depth}")  # fmt: skip
-    _require(b.tissue != "soft" or s.physics.contact == "penalty", src, "physics.contact",
-             "a soft body's tissue is the contact law: use contact = \"penalty\"")  # fmt: skip
+    check_tissue_law(s)
     if b.z_range:
         _require(len(b.z_range) == 2 and b.z_range[0] < b.z_range[1], src, "body.z_range",
                  f"must be [z_min, z_max] with z_min < z_max, got {b.z_range}")  # fmt: skip
