@@ -19,6 +19,10 @@ from fenics_garment._stack import MPI
 
 #: Seconds a failed rank waits for the others to fail too before aborting the job.
 GRACE = 5.0
+#: Seconds between printing the message and ``MPI_Abort``: the launcher forwards a rank's stderr
+#: through a pipe, and an abort right after the print can kill the forwarder before it has passed
+#: the line on (seen once in CI under load: exit code 2 and an empty stderr).
+DRAIN = 1.0
 _comm: MPI.Comm | None = None
 
 
@@ -52,5 +56,6 @@ def end_together(code: int, message: str, *, grace: float = GRACE) -> int:
         return code
     print(f"error (rank {world.rank} of {world.size}; the other ranks are stopped): {message}",
           file=sys.stderr, flush=True)  # fmt: skip
+    time.sleep(DRAIN)
     world.Abort(code)
     return code  # not reached
