@@ -82,6 +82,8 @@ def child(spec: dict) -> dict:
         phys = replace(phys, friction=0.0)
     if variant == "gravity-off":
         phys = replace(phys, gravity=False)
+    if variant == "adaptive":  # the dressing path chosen by Newton on each mesh
+        s = replace(s, dressing=replace(s.dressing, schedule="adaptive"))
     if "body_surface" in spec:  # benchmarks/smooth_body.py
         phys = replace(phys, body_surface=spec["body_surface"])
     if "body_mesh_size" in spec:
@@ -182,6 +184,7 @@ def _record(res, spec: dict, comm) -> dict:
         "body_surface": spec.get("body_surface"),
         "body_mesh_size": spec.get("body_mesh_size"),
         "per_turn": spec.get("per_turn"),
+        "schedule": sm.get("dressing_schedule"),
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve
         "final_ratios": [(x["stage"], x["iterations"], x.get("final_ratios")) for x in steps],
         "failed_attempts": len(sm["dressing"]["failed_attempts"]),

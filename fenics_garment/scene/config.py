@@ -126,18 +126,22 @@ class PhysicsConfig:
 
 @dataclass(frozen=True)
 class DressingConfig:
-    """Dressing by shrinking the body and growing it back in adaptive steps.
+    """Dressing by shrinking the body and growing it back in steps (:mod:`.dressing`).
 
-    ``regularisation``: c₀ of the pseudo-time term ½ c (u − u_prev)² relative to A/ℓ² (membrane
-    stiffness over the element size squared); it vanishes with the shrink, c = c₀ s/s₀, and the
-    final state is re-solved with c = 0.
+    ``regularisation``: c₀ of the pseudo-time spring ½ c (u − u_prev)² relative to A/ℓ²
+    (membrane stiffness over the element size squared); on while the body grows, then released
+    to c = 0. ``schedule``: ``"fixed"`` — the body grows in ``steps`` equal steps and the spring
+    is released through a fixed sequence, the same path on every mesh (with friction the answer
+    depends on the path, so this is what makes it converge under mesh refinement) — or
+    ``"adaptive"`` (steps grow by ``grow`` after an easy solve; fewer solves, a path per mesh).
     """
 
     steps: int = 4
     margin: float = 0.002  # shrink beyond the deepest initial penetration [m]
     max_cuts: int = 4  # halvings of a failed step before giving up
     regularisation: float = 1e-2
-    grow: float = 1.5  # step growth after an easy step
+    grow: float = 1.5  # step growth after an easy step (adaptive schedule)
+    schedule: str = "fixed"
 
 
 @dataclass(frozen=True)
@@ -186,6 +190,7 @@ EASE_LEVELS = {
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
+DRESSING_SCHEDULES = ("fixed", "adaptive")  # scene.dressing.dress
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
@@ -426,6 +431,7 @@ def _check(s: Scene) -> None:
     _require(d.max_cuts >= 0, src, "dressing.max_cuts", f"must be >= 0, got {d.max_cuts}")
     _require(d.regularisation >= 0, src, "dressing.regularisation", "must be >= 0")
     _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
+    _one_of(d.schedule, DRESSING_SCHEDULES, src, "dressing.schedule")
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
              f"got {s.name!r}")  # fmt: skip

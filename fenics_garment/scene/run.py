@@ -538,7 +538,8 @@ def _dress(
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
                        on_failure=on_failure, augmented_lagrangian=al,
-                       on_checkpoint=write_ckpt, resume=progress)  # fmt: skip
+                       on_checkpoint=write_ckpt, resume=progress,
+                       schedule=d.schedule)  # fmt: skip
     except DressingFailed as err:
         say("  " + str(err))
         return err.report, False, str(err)
@@ -620,6 +621,7 @@ def _outputs(
         "max_membrane_strain": max_strain,
         "terms": built.terms(),  # the laws and terms of the problem solved
         "dressing": report.as_dict(),
+        "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
         "time_s": times,
         "solver_time_s": {
             k: v for k, v in solver.timings.as_dict().items() if k not in ("steps", "cuts")
