@@ -13,7 +13,12 @@ regions.
 
 Writes ``benchmarks/results/convergence.json`` and ``convergence-<scene>.png``.
 
-    python -m benchmarks.convergence [--quick] [scene ...] [--levels N] [--variant friction-off]
+    python -m benchmarks.convergence [--quick] [scene ...] [--levels N] [--reuse]
+                                     [--variant friction-off|adaptive]
+
+``--reuse`` keeps the stored completed runs of the same levels and dressing schedule and runs
+only the missing ones (e.g. a fourth level). ``--variant adaptive`` dresses with the adaptive
+schedule (``[dressing] schedule``; key ``<scene>:adaptive``).
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) separates the
 discretisation error from the dependence of a frictional answer on its loading path: with
@@ -61,9 +66,18 @@ def sizes(h0: float, n: int) -> list[float]:
     return [h0 * RATIO**k for k in range(n)]
 
 
-def run_scene(stem: str, h0: float, n: int, say, variant: str = "default") -> list[dict]:
+def run_scene(stem: str, h0: float, n: int, say, variant: str = "default",
+              known: list[dict] = ()) -> list[dict]:  # fmt: skip
+    """The runs of ``stem`` on ``n`` levels from ``h0``; a completed run of ``known`` on the same
+    mesh with the scene's current dressing schedule is kept instead of being run again."""
     recs = []
     for k, h in enumerate(sizes(h0, n)):
+        same = [r for r in known if r.get("status") == "ok" and math.isclose(r["mesh_size"], h)
+                and r.get("schedule") == _schedule(stem, variant)]  # fmt: skip
+        if same:
+            recs.append(same[-1])
+            say(f"  {stem} h = {h * 1e3:5.1f} mm  kept from the record")
+            continue
         t0 = time.perf_counter()
         spec = {"scene": str(SCENES / f"{stem}.toml"), "mesh_size": h, "variant": variant}
         if stem in PER_TURN:
@@ -80,6 +94,14 @@ def run_scene(stem: str, h0: float, n: int, say, variant: str = "default") -> li
             f"{r['completed']}  c_final {r['final_regularisation']:.2g}  penetration "
             f"{pen:.2%} h  {time.perf_counter() - t0:6.1f} s")  # fmt: skip
     return recs
+
+
+def _schedule(stem: str, variant: str) -> str:
+    """The dressing schedule a run of ``stem`` with ``variant`` uses (benchmarks.scenes.child)."""
+    from fenics_garment.scene import config
+
+    return "adaptive" if variant == "adaptive" else config.load(
+        SCENES / f"{stem}.toml").dressing.schedule  # fmt: skip
 
 
 def analyse(recs: list[dict]) -> dict:
@@ -205,9 +227,10 @@ def main(argv: list[str] | None = None) -> int:
         h0, n = table.get(stem, LEVELS[stem])
         n = n_override or n
         say(f"{stem}: garment meshes {[round(h * 1e3, 1) for h in sizes(h0, n)]} mm")
-        recs = run_scene(stem, h0, n, say, variant)
-        ana = analyse(recs)
         key = stem if variant == "default" else f"{stem}:{variant}"
+        known = data["scenes"].get(key, {}).get("runs", []) if "--reuse" in argv else []
+        recs = run_scene(stem, h0, n, say, variant, known)
+        ana = analyse(recs)
         data["scenes"][key] = {"runs": recs, "analysis": ana, "loadavg": os.getloadavg()}
         RESULTS.mkdir(exist_ok=True)
         path.write_text(json.dumps(data, indent=1, default=float))

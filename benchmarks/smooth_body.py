@@ -4,14 +4,16 @@
   ``[physics] body_surface`` = ``"faceted"`` and ``"smooth"`` at garment meshes ``SIZES``; per run:
   completed / stalled, spring released to c = 0, solves, Newton iterations, failed attempts, the
   residual ratio r_k/r_(k−1) of the last iteration of every converged solve, contact-search time.
-* ``refine``: each gilet at the demo's garment mesh with the body mesh refined 2× (15 → 7.5 mm):
-  the change of every region's p95 pressure (the body-mesh part of the error), per surface.
+* ``refine``: each gilet at garment mesh ``--garment H`` (default the first of ``SIZES``) on the
+  body meshes 15 and 7.5 mm: the change of every region's p95 pressure (the body-mesh part of
+  the error), per surface, element and dressing schedule.
 
 Each run is one ``mpiexec -n 2`` child of :func:`benchmarks.scenes.spawn` (spec fields
 ``body_surface``, ``body_mesh_size``). Writes ``benchmarks/results/smooth_body.json`` (kept after
 every run) and prints the tables; times are on a shared 2-core machine (loadavg recorded).
 
-    python -m benchmarks.smooth_body [--quick] [runs] [refine]
+    python -m benchmarks.smooth_body [--quick] [runs] [refine] [--garment H] [--surface S]
+                                     [cotton|nylon ...]
     python -m benchmarks.smooth_body table            (the stored record as Markdown tables)
     python -m benchmarks.smooth_body row FOLDER ...   (the underbust row of run folders' maps)
 """
@@ -43,7 +45,8 @@ def _save(data: dict) -> None:
 
 
 def _key(r: dict) -> tuple:
-    return (r["scene_name"], r["body_surface"], r["mesh_size"], r.get("body_mesh_size", BODY))
+    return (r["scene_name"], r["body_surface"], r["mesh_size"], r.get("body_mesh_size", BODY),
+            r.get("element") or "", r.get("schedule") or "")  # fmt: skip
 
 
 def run_one(data: dict, name: str, surface: str, h: float, body: float = BODY) -> dict:
@@ -76,31 +79,41 @@ def row(r: dict) -> str:
             f"load {r['loadavg'][0]:.1f}")  # fmt: skip
 
 
-def refinement_table(data: dict, h: float) -> dict:
-    """p95 change per region [%] when the body mesh goes from BODY to BODY/2, per scene/surface."""
+def refinement_table(data: dict) -> dict:
+    """p95 change per region [%] when the body mesh goes from BODY to BODY/2, for every pair of
+    completed runs that differ only in the body mesh (scene, surface, garment mesh, element,
+    dressing schedule)."""
     out = {}
     ok = {_key(r): r for r in data["runs"] if r.get("status") == "ok" and r["completed"]}
-    for name in SCENES:
-        for surface in SURFACES:
-            a, b = ok.get((name, surface, h, BODY)), ok.get((name, surface, h, BODY / 2))
-            if a is None or b is None:
-                continue
-            pa, pb = a["regions_p95_kPa"], b["regions_p95_kPa"]
-            out[f"{name}/{surface}"] = {
-                k: 100.0 * (pb[k] / pa[k] - 1.0) for k in pa if k in pb and pa[k] > 0.02
-            }
+    for key, b in ok.items():
+        name, surface, h, body, element, schedule = key
+        a = ok.get((name, surface, h, BODY, element, schedule))
+        if body != BODY / 2 or a is None:
+            continue
+        pa, pb = a["regions_p95_kPa"], b["regions_p95_kPa"]
+        label = f"{name}/{surface}, garment {h * 1e3:.1f} mm {element or 'P1-P1'} {schedule}"
+        out[label.strip()] = {
+            k: 100.0 * (pb[k] / pa[k] - 1.0) for k in pa if k in pb and pa[k] > 0.02
+        }
     return out
+
+
+def _how(r: dict) -> str:
+    """Element and dressing schedule of a run (the early runs: P1-P1, adaptive)."""
+    return f"{r.get('element') or 'P1-P1'}, {r.get('schedule') or 'adaptive'}"
 
 
 def markdown(data: dict) -> str:
     """The runs as a Markdown table, then the body-refinement p95 changes per region."""
-    lines = ["| gilet | body | garment h | body h | outcome | solves | Newton its | failed tries "
-             "| last-iteration ratio: median / max | search / dressing [s] |",
-             "|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
+    lines = ["| gilet | body | element, dressing | garment h | body h | outcome | solves | "
+             "Newton its | failed tries | last-iteration ratio: median / max | "
+             "search / dressing [s] |",
+             "|---|---|---|---|---|---|---|---|---|---|---|"]  # fmt: skip
     for r in sorted(data["runs"], key=_key):
         if r.get("status") != "ok":
-            lines.append(f"| {r['scene_name']} | {r['body_surface']} | {r['mesh_size']} | "
-                         f"{r['body_mesh_size']} | run failed | | | | | |")  # fmt: skip
+            lines.append(f"| {r['scene_name']} | {r['body_surface']} | {_how(r)} | "
+                         f"{r['mesh_size']} | {r['body_mesh_size']} | failed |"
+                         + " |" * 5)  # fmt: skip
             continue
         lr = last_ratios(r)
         state = (
@@ -112,7 +125,8 @@ def markdown(data: dict) -> str:
                 else "stalled"
             )
         )
-        lines.append(f"| {r['scene_name']} | {r['body_surface']} | {r['mesh_size'] * 1e3:g} mm | "
+        lines.append(f"| {r['scene_name']} | {r['body_surface']} | {_how(r)} | "
+                     f"{r['mesh_size'] * 1e3:.1f} mm | "
                      f"{r['body_mesh_size'] * 1e3:g} mm | {state} | {r['solves']} | "
                      f"{r['newton_its']} | {r['failed_attempts']} | {np.median(lr):.1e} / "
                      f"{max(lr):.1e} | {r['contact_search_s']:.0f} / "
@@ -154,6 +168,10 @@ def main(argv: list[str]) -> int:
         return 0
     mode = "quick" if "--quick" in argv else "default"
     parts = [a for a in argv if a in ("runs", "refine")] or ["runs", "refine"]
+    # refine: the garment mesh [m] and the surfaces (default: the first size, both surfaces)
+    h_ref = float(argv[argv.index("--garment") + 1]) if "--garment" in argv else SIZES[mode][0]
+    surfaces = [argv[argv.index("--surface") + 1]] if "--surface" in argv else SURFACES[::-1]
+    names = [a for a in argv if a in SCENES] or list(SCENES)
     data = _load()
     data.setdefault("meta", {})["loadavg_start"] = list(os.getloadavg())
     if "runs" in parts:
@@ -162,10 +180,11 @@ def main(argv: list[str]) -> int:
                 for h in SIZES[mode]:
                     run_one(data, name, surface, h)
     if "refine" in parts:
-        for surface in SURFACES[::-1]:
-            for name in SCENES:
-                run_one(data, name, surface, SIZES[mode][0], BODY / 2)
-    data["refinement_p95_change_percent"] = refinement_table(data, SIZES["quick"][0])
+        for surface in surfaces:
+            for name in names:
+                for body in (BODY, BODY / 2):
+                    run_one(data, name, surface, h_ref, body)
+    data["refinement_p95_change_percent"] = refinement_table(data)
     _save(data)
     print(markdown(data))
     return 0

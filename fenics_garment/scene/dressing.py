@@ -267,7 +267,7 @@ def dress(
         reg.c.value = pr.c
         st.refresh()
     s0 = rep.shrink0
-    grid = s0 / steps  # the fixed schedule's shrink step
+    grid = s0 / steps if first_step is None else first_step * s0  # the fixed schedule's step
     if mu is not None and not friction_while_dressing and pr.stage == "grow":
         mu.value = 0.0
     cuts = 0
