@@ -73,7 +73,7 @@ def run_scene(stem: str, h0: float, n: int, say, variant: str = "default",
     recs = []
     for k, h in enumerate(sizes(h0, n)):
         same = [r for r in known if r.get("status") == "ok" and math.isclose(r["mesh_size"], h)
-                and r.get("schedule") == _schedule(stem, variant)]  # fmt: skip
+                and r.get("schedule") == schedule_of(stem, variant)]  # fmt: skip
         if same:
             recs.append(same[-1])
             say(f"  {stem} h = {h * 1e3:5.1f} mm  kept from the record")
@@ -96,7 +96,7 @@ def run_scene(stem: str, h0: float, n: int, say, variant: str = "default",
     return recs
 
 
-def _schedule(stem: str, variant: str) -> str:
+def schedule_of(stem: str, variant: str) -> str:
     """The dressing schedule a run of ``stem`` with ``variant`` uses (benchmarks.scenes.child)."""
     from fenics_garment.scene import config
 

@@ -143,6 +143,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [convergence_markdown(d), ""]
             continue
+        if name == "sweep":  # robust dressing over many garment meshes (benchmarks/sweep.py)
+            from benchmarks.sweep import markdown as sweep_markdown
+
+            parts += [sweep_markdown(d), ""]
+            continue
         if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
             from benchmarks.smooth_body import markdown
 
