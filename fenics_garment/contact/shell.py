@@ -131,7 +131,7 @@ def attach(
     normal: str = "gradient",
     band: float = 0.02,
     mu: float | None = None,
-    stick_ratio: float = 1.0,
+    kappa_t: float | None = None,
 ) -> ShellContact:
     """Add normal contact with ``body`` to ``model`` (before the solver is built).
 
@@ -142,8 +142,11 @@ def attach(
             stiffness, its largest cell size and ``kappa_hat``.
         rule, normal, band: see :class:`ContactState`.
         mu: Coulomb friction coefficient (None: frictionless, no friction term is assembled). It
-            becomes ``contact.friction.mu``, a Constant; the stick penalty κ_T is κ. Call
-            ``contact.accept_step()`` after each converged load step.
+            becomes ``contact.friction.mu``, a Constant. Call ``contact.accept_step()`` after
+            each converged load step.
+        kappa_t: the stick penalty κ_T [Pa/m] (``contact.friction.kappa_t``); None: κ. With
+            the default κ, which scales as 1/ℓ², a sticking answer depends on the mesh; scenes
+            pass the skin's tangential stiffness (``scene.build.stick_stiffness``).
     """
     mesh = model.geometry.mesh
     s = model.stiffness
@@ -156,7 +159,7 @@ def attach(
     k = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa))
     friction = None
     if mu is not None:
-        kt = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa * stick_ratio))
+        kt = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa_t or kappa))
         friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), kt)
     state.friction, state.kappa = friction, k  # the point updates evaluate the laws with them
     contact = ShellContact(model, state, k)

@@ -124,6 +124,12 @@ class SoftTissue:
         """k = E (1 − ν) / ((1 + ν)(1 − 2ν) depth)  [Pa/m]."""
         return self.E * (1 - self.nu) / ((1 + self.nu) * (1 - 2 * self.nu) * self.depth)
 
+    @property
+    def shear_stiffness(self) -> float:
+        """k_T = G / depth = E / (2 (1 + ν) depth)  [Pa/m]: the layer's tangential stiffness,
+        the skin's give under a sticking garment before it slides (the stick penalty κ_T)."""
+        return self.E / (2 * (1 + self.nu) * self.depth)
+
 
 def default_penalty(
     membrane_stiffness: float, element_size: float, kappa_hat: float = 10.0

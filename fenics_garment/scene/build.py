@@ -205,9 +205,11 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
     contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
                                    kappa_hat=p.kappa_hat, rule=_rule(model),
-                                   mu=p.friction if p.friction > 0 else None)  # fmt: skip
+                                   mu=p.friction if p.friction > 0 else None,
+                                   kappa_t=stick_stiffness(scene))  # fmt: skip
     mu = contact.friction.mu if contact.friction else None
-    c0 = scene.dressing.regularisation / p.kappa_hat * float(contact.kappa.value)
+    d = scene.dressing
+    c0 = d.regularisation * model.stiffness.membrane_scale / d.spring_length**2
     reg = add_regularisation(model, c0)
     return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
 
@@ -222,6 +224,20 @@ def tissue_stiffness(scene: Scene) -> float | None:
     check_tissue_law(scene)  # also for a Scene made in Python (the loader checks files)
     b = scene.body
     return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
+
+
+def stick_stiffness(scene: Scene) -> float:
+    """The stick penalty κ_T [Pa/m] of the friction law: ``physics.stick_stiffness`` or, if 0,
+    the tangential stiffness G / depth of the skin's tissue layer (seed paper Table 1 modulus
+    and Poisson ratio, ``body.tissue_depth``; :attr:`SoftTissue.shear_stiffness`), for rigid
+    and soft bodies alike. A physical value, not the normal penalty: κ = κ̂ E h / ℓ² grows as
+    the garment mesh is refined, and with it how firmly a sticking point holds — measured on
+    the cotton gilet, the frictional p95 drifted by 10–50 % from 35 to 12.4 mm garment cells
+    while the frictionless one converged to 1 %."""
+    from fenics_garment.contact.terms import SoftTissue
+
+    p = scene.physics
+    return p.stick_stiffness or SoftTissue(depth=scene.body.tissue_depth).shear_stiffness
 
 
 def _rule(model: ShellModel) -> str:

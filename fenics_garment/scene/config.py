@@ -117,6 +117,9 @@ class PhysicsConfig:
     contact: str = "augmented-lagrangian"  # penalty | augmented-lagrangian
     tolerance: float = 0.01  # augmented Lagrangian: max penetration / garment thickness
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
+    #: the stick penalty κ_T [Pa/m] of the friction law; 0: the skin's tangential stiffness
+    #: G / body.tissue_depth with the seed paper's Table 1 tissue (scene.build.stick_stiffness)
+    stick_stiffness: float = 0.0
     max_updates: int = 8  # augmented-Lagrangian multiplier updates
     body_surface: str = "smooth"  # smooth (contact.smooth: C² IMLS distance) | faceted
     #: "module:function" or "file.py:function" (relative to the scene file): a hook called with
@@ -128,18 +131,22 @@ class PhysicsConfig:
 class DressingConfig:
     """Dressing by shrinking the body and growing it back in steps (:mod:`.dressing`).
 
-    ``regularisation``: c₀ of the pseudo-time spring ½ c (u − u_prev)² relative to A/ℓ²
-    (membrane stiffness over the element size squared); on while the body grows, then released
-    to c = 0. ``schedule``: ``"fixed"`` — the body grows in ``steps`` equal steps and the spring
-    is released through a fixed sequence, the same path on every mesh (with friction the answer
-    depends on the path, so this is what makes it converge under mesh refinement) — or
-    ``"adaptive"`` (steps grow by ``grow`` after an easy solve; fewer solves, a path per mesh).
+    ``regularisation``: c₀ of the pseudo-time spring ½ c (u − u_prev)² relative to E h / L²
+    (membrane stiffness over ``spring_length`` squared); on while the body grows, then released
+    to c = 0. L is a fixed length, not the element size: the spring's pull when friction comes
+    on is part of a frictional answer, so it must not change with the mesh.
+
+    ``schedule``: ``"fixed"`` — the body grows in ``steps`` equal steps and the spring is
+    released through a fixed sequence, the same path on every mesh (with friction the answer
+    depends on the path) — or ``"adaptive"`` (steps grow by ``grow`` after an easy solve; fewer
+    solves, a path per mesh).
     """
 
     steps: int = 4
     margin: float = 0.002  # shrink beyond the deepest initial penetration [m]
     max_cuts: int = 4  # halvings of a failed step before giving up
     regularisation: float = 1e-2
+    spring_length: float = 0.03  # L [m] of the spring's scale E h / L²
     grow: float = 1.5  # step growth after an easy step (adaptive schedule)
     schedule: str = "fixed"
 
@@ -425,11 +432,13 @@ def _check(s: Scene) -> None:
     _require(0 < p.tolerance <= 1, src, "physics.tolerance",
              f"is a fraction of the garment thickness in (0, 1], got {p.tolerance}")  # fmt: skip
     _require(p.kappa_hat > 0, src, "physics.kappa_hat", f"must be positive, got {p.kappa_hat}")
+    _require(p.stick_stiffness >= 0, src, "physics.stick_stiffness", "must be >= 0 (0: skin)")
     _require(p.max_updates >= 0, src, "physics.max_updates", "must be >= 0")
     _require(d.steps >= 1, src, "dressing.steps", f"must be >= 1, got {d.steps}")
     _require(d.margin >= 0, src, "dressing.margin", f"must be >= 0, got {d.margin}")
     _require(d.max_cuts >= 0, src, "dressing.max_cuts", f"must be >= 0, got {d.max_cuts}")
     _require(d.regularisation >= 0, src, "dressing.regularisation", "must be >= 0")
+    _require(d.spring_length > 0, src, "dressing.spring_length", "must be positive")
     _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
     _one_of(d.schedule, DRESSING_SCHEDULES, src, "dressing.schedule")
     _require(_plain_name(s.name), src, "name",
