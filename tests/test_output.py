@@ -18,11 +18,25 @@ def test_comfort_bands(kpa, band):
 
 
 def test_weighted_percentile_counts_area():
-    # 90 % of the area at 1 kPa, 10 % at 5 kPa: p95 is 5, p80 is 1
-    p = np.array([1.0, 5.0])
-    a = np.array([0.9, 0.1])
-    assert output.weighted_percentile(p, a, 95) == 5.0
-    assert output.weighted_percentile(p, a, 80) == 1.0
+    # 90 % of the area at 1 kPa (cumulative midpoint 45 %), 10 % at 5 kPa (midpoint 95 %):
+    # p95 is 5, p45 and below 1, in between linear (p80 = 1 + 4·35/50)
+    p = np.array([5.0, 1.0])
+    a = np.array([0.1, 0.9])
+    assert output.weighted_percentile(p, a, 95) == pytest.approx(5.0)
+    assert output.weighted_percentile(p, a, 30) == pytest.approx(1.0)
+    assert output.weighted_percentile(p, a, 80) == pytest.approx(3.8)
+
+
+@pytest.mark.parametrize("n", [8, 40, 300])
+def test_weighted_percentile_of_a_sampled_field(n):
+    """p(x) = x on [0, 1] sampled on n unequal cells (value at the cell middle, weight its
+    length): the area-weighted p95 of the field is exactly 0.95, and the interpolated estimate
+    gets it to round-off for any n once 95 % lies below the last cell's middle (the step
+    definition is off by up to a cell length)."""
+    inner = np.random.default_rng(n).random(n - 2) * 0.9
+    edges = np.sort(np.r_[0.0, inner, 0.9, 1.0])
+    mid, w = 0.5 * (edges[1:] + edges[:-1]), np.diff(edges)
+    assert output.weighted_percentile(mid, w, 95) == pytest.approx(0.95, abs=1e-12)
 
 
 def test_region_table_hand_computed():
