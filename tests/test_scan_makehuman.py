@@ -283,3 +283,67 @@ def test_scan_gilet_scene_end_to_end(tmp_path):
     touched = {r["region"] for r in result.regions if r.get("mean_kPa", 0) > 0}
     assert touched and touched <= set(TORSO_REGIONS) | {"shoulders", "neck", "arms"}
     assert {"bust", "shoulders"} <= touched
+
+
+# Limb joints against the rig (measured: left and right alike, the mesh is symmetric). Offsets
+# are along the limb's own axis at the landmark, + towards the tip; tolerances name the anatomy.
+LIMB_JOINTS = {
+    # joint: (limb, rig joint, axial offset range [m], max distance off the axis [m])
+    # the elbow: the arm's sharpest bend, within 3 cm of the joint along the axis (measured
+    # 2.3 cm) and inside the elbow's section (radius girth/2π = 3.6 cm; measured 2.9 cm off)
+    "elbow": ("arm", "elbow", (-0.03, 0.03), 0.036),
+    # the wrist: the narrowest forearm section, proximal to the carpal joint, where the hand
+    # starts to widen (measured 4.1 cm before the joint; 3.3 cm off the forearm's axis: the
+    # hand turns forward from there)
+    "wrist": ("arm", "hand", (0.0, 0.07), 0.04),
+    # the knee: the leg's sharpest bend above the calf (measured 0.7 cm); the rig's knee is
+    # anterior, near the patella (1 cm inside the front of the knee): measured 5.2 cm off
+    "knee": ("leg", "knee", (-0.02, 0.02), 0.06),
+    # the ankle: the narrowest section above the malleoli, up to 8 cm above the joint (as the
+    # horizontal ankle level above; measured 6.2 cm), the joint then in the heel (4.0 cm off)
+    "ankle": ("leg", "ankle", (0.0, 0.08), 0.045),
+}
+
+
+@pytest.mark.parametrize("side", ["left", "right"])
+@pytest.mark.parametrize("joint", list(LIMB_JOINTS))
+def test_limb_joints_against_makehuman_rig(scan, ref, joint, side):
+    """Elbows, wrists, knees, ankles found on each limb's own centreline, against the rig."""
+    body, _ = scan
+    kind, rig, (lo, hi), radial = LIMB_JOINTS[joint]
+    limb = body.limbs[f"{kind}_{side}"]
+    j = ref["joints"][f"{side[0]}-{rig}"]
+    p, tangent, _, _ = (x[0] for x in limb.frame_at(limb.marks[joint]))
+    along = float((j - p) @ tangent)  # > 0: the joint lies further towards the tip
+    off = float(np.linalg.norm((j - p) - along * tangent))
+    print(f"{joint} {side}: joint {along * 100:+.1f} cm along the axis, {off * 100:.1f} cm off")
+    assert lo < along < hi
+    assert off < radial
+    assert np.allclose(body.points[f"{joint}_{side}"], p)
+
+
+def test_limb_sections_against_a_direct_cut(scan):
+    """Each limb level's girth is its section perpendicular to the limb: cut here by the plane
+    through the centreline point normal to the axis, keep the cut points within 12 cm of the
+    axis point on the limb's side, and take their convex hull's perimeter."""
+    body, _ = scan
+    v, t = body.vertices, body.triangles
+    for name, limb in body.limbs.items():
+        for level, s in limb.marks.items():
+            p, tangent, _, _ = (x[0] for x in limb.frame_at(s))
+            d = (v - p) @ tangent
+            e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
+            cross = d[e[:, 0]] * d[e[:, 1]] < 0
+            a, b = e[cross, 0], e[cross, 1]
+            w = d[a] / (d[a] - d[b])
+            q = v[a] + w[:, None] * (v[b] - v[a])
+            q = q[np.linalg.norm(q - p, axis=1) < 0.12]
+            basis = np.linalg.svd(np.eye(3) - np.outer(tangent, tangent))[0][:, :2]
+            direct = ConvexHull((q - p) @ basis).area
+            own = ConvexHull(limb.sections[level]).area
+            assert own == pytest.approx(direct, rel=0.01), (name, level)
+    # the arm levels are ordered wrist < forearm < elbow < upper arm girth on this body
+    g = {
+        k: ConvexHull(body.limbs["arm_left"].sections[k]).area for k in body.limbs["arm_left"].marks
+    }
+    assert g["wrist"] < g["forearm"] < g["elbow"] < g["upper_arm"]

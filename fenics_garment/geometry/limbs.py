@@ -232,9 +232,7 @@ def _frames(c: Array) -> tuple[Array, Array, Array]:
     return t, np.array(e1s), np.array(e2s)
 
 
-def own_section(
-    v: Array, lt: IArray, c: Array, t: Array, e1: Array, e2: Array
-) -> Array | None:
+def own_section(v: Array, lt: IArray, c: Array, t: Array, e1: Array, e2: Array) -> Array | None:
     """The closed loop around ``c`` where the plane through ``c`` normal to ``t`` cuts the
     limb's triangles ``lt``, in (e1, e2) coordinates; None if no closed loop surrounds ``c``
     (at the root the cut reaches the torso, at the hand the fingers)."""
