@@ -60,6 +60,8 @@ BEND_CHORD = 0.08
 ROOT_CLEARANCE = 0.035
 #: spacing [m] of the fine frame samples used to map garments to the limb
 FINE = 0.002
+#: Fourier harmonics kept in a limb's level sections (:func:`smooth_section`)
+SECTION_HARMONICS = 12
 #: the landmark levels of each limb kind, tip to root
 ARM_MARKS = ("wrist", "forearm", "elbow", "upper_arm")
 LEG_MARKS = ("ankle", "calf", "knee", "thigh")
@@ -353,5 +355,26 @@ def analyse_limb(v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str) ->
         p = own_section(v, lt, cc, tt, a, b)
         if p is None:
             raise ScanError(f"{name}: no section of the limb alone at its {level}")
-        limb.sections[level] = sec.convex_hull(p)
+        limb.sections[level] = smooth_section(sec.convex_hull(p))
     return limb
+
+
+def smooth_section(hull: Array, n: int = 720, harmonics: int = SECTION_HARMONICS) -> Array:
+    """A convex section's radius about its centroid as a Fourier series cut at ``harmonics``,
+    sampled at ``n`` angles (counter-clockwise from +e1).
+
+    A limb's hull has 20–40 corners; offsetting it inwards point by point (a tight garment)
+    crosses the points near each corner over each other, and the offset's perimeter stops
+    following Steiner's formula (measured on the MakeHuman wrist: 1 mm inwards −6.3 mm of
+    perimeter as expected, 2 mm only −5.8 mm). Rounding the corners shortens the curve by
+    ≈ 0.5 %; it is scaled back about the centroid to the hull's perimeter, the tape girth.
+    """
+    c = sec.centroid(hull)
+    pts = sec.resample_by_angle(hull, n, centre=c) - c
+    r = np.linalg.norm(pts, axis=1)
+    f = np.fft.rfft(r)
+    f[harmonics + 1 :] = 0.0
+    r = np.fft.irfft(f, n)
+    th = 2.0 * np.pi * np.arange(n) / n
+    out = r[:, None] * np.column_stack([np.cos(th), np.sin(th)])
+    return c + out * (sec.perimeter(hull) / sec.perimeter(out))
