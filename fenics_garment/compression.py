@@ -74,14 +74,16 @@ def laplace_pressure(body_girth: float, ease: float, stiffness, bending: bool = 
 
 def band_pressure(built, z: float, half_width: float) -> float:
     """Simulated mean pressure [Pa] in the band |z' − z| < ``half_width`` of a dressed scene:
-    contact force over deformed area of the garment's contact points there (every rank)."""
+    contact force over deformed area of the garment's contact points there (every rank). z' is
+    the height, or on a scan's limb the distance along its centreline
+    (:meth:`~fenics_garment.geometry.garments.GarmentSurface.axial`)."""
     from fenics_garment._stack import MPI
     from fenics_garment.contact import pressure as cpressure
 
     st, c = built.contact.state, built.contact
     f = cpressure.point_forces(st, c.traction)
     a = cpressure.point_areas(st, c.area_stretch())
-    sel = np.abs(cpressure.positions(st)[:, 2] - z) < half_width
+    sel = np.abs(built.garment.axial(cpressure.positions(st)) - z) < half_width
     comm = built.model.geometry.mesh.comm
     area = comm.allreduce(float(a[sel].sum()), op=MPI.SUM)
     force = comm.allreduce(float(f[sel].sum()), op=MPI.SUM)

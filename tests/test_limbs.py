@@ -55,7 +55,8 @@ def test_sleeve_levels_follow_the_ease():
     ("text", "key", "words"),
     [
         ("[body]\nkind = 'arm'\n[garment]\nkind = 'gilet'\n", "garment.kind", "mannequin or scan"),
-        ("[garment]\nkind = 'sleeve'\n", "garment.kind", "needs an arm body"),
+        ("[garment]\nkind = 'sleeve'\n", "garment.kind", "needs an arm or scan body"),
+        ("[body]\nkind = 'arm'\n[garment]\nkind = 'sleeve'\nside = 'up'\n", "garment.side", "left"),
         ("[body]\nkind = 'arm'\nmeasurements = { wrist = 0.15 }\n[garment]\nkind = 'sleeve'\n",
          "body.measurements.wrist", "wrist_girth"),
         ("[body]\nkind = 'arm'\n[garment]\nkind = 'sleeve'\nease = { wirst = -0.1 }\n",

@@ -24,6 +24,11 @@ centred near x = 0), not from fixed fractions of the stature:
   the upper arms never count; below the armpits the torso outline is on its own.
 * Waist, hip, bust, under-bust: the narrowest / widest torso girths in their ranges (see
   :func:`torso_levels`); knee, calf, ankle: the narrowest / widest leg girths.
+* **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
+  perpendicular to it, elbows and wrists, knees and ankles found on the limb itself
+  (:attr:`Anatomy.limbs`; their centreline points in :attr:`Anatomy.points` as
+  ``elbow_left`` …). A limb that cannot be followed is left out with its reason in
+  :attr:`Anatomy.limb_problems` (only a garment on that limb needs it).
 
 Girths are tape girths (convex hull perimeter, ISO 8559-1). Overrides (heights in metres)
 replace any detected level.
@@ -40,6 +45,7 @@ from scipy.sparse.csgraph import connected_components
 
 from . import sections as sec
 from .errors import ScanError
+from .limbs import Limb, analyse_limb
 from .measurements import LEG_LEVELS, TORSO_LEVELS
 
 Array = npt.NDArray[np.float64]
@@ -75,6 +81,8 @@ class Anatomy:
     part: npt.NDArray[np.int32]
     girths: dict[str, float] = field(default_factory=dict)
     sections: dict[str, Array] = field(default_factory=dict)  # torso-only tape sections
+    limbs: dict[str, Limb] = field(default_factory=dict)  # "arm_left" … (module doc)
+    limb_problems: dict[str, str] = field(default_factory=dict)  # limb -> why it is missing
 
     def torso_section(self, vertices: Array, triangles: IArray, z: float) -> Array:
         """The torso's tape (convex hull) section at ``z``, clipped to the arm cuts."""
@@ -221,7 +229,31 @@ def analyse(
     part = body_parts(v, t, marks, cut)
     girths = {k: girth(marks[k]) for k in TORSO_LEVELS if k in marks and k != "crotch"}
     sections = {k: torso_section(v, t, marks[k], cut, z_ap) for k in girths}
-    return Anatomy(marks, pts, cut, part, girths, sections)
+    limbs, problems = find_limbs(v, t, part)
+    for name, limb in limbs.items():
+        side = name.split("_")[1]
+        for joint in ("elbow", "wrist", "knee", "ankle"):
+            if joint in limb.marks:
+                pts[f"{joint}_{side}"] = limb.point(joint)
+    return Anatomy(marks, pts, cut, part, girths, sections, limbs, problems)
+
+
+def find_limbs(
+    v: Array, t: IArray, part: npt.NDArray[np.int32]
+) -> tuple[dict[str, Limb], dict[str, str]]:
+    """Every arm and leg followed along its centreline (:mod:`.limbs`), and the reason for
+    each one that could not be."""
+    limbs, problems = {}, {}
+    for name in ("arm_left", "arm_right", "leg_left", "leg_right"):
+        mine = part == PARTS[name]
+        if not mine.any():
+            problems[name] = f"no {name.replace('_', ' ')} was found on the body"
+            continue
+        try:
+            limbs[name] = analyse_limb(v, t, mine, name)
+        except ScanError as e:
+            problems[name] = str(e)
+    return limbs, problems
 
 
 def _arm_root(

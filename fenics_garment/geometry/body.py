@@ -39,6 +39,8 @@ class BodySurface:
         part: (m,) body part per triangle (:data:`~.anatomy.PARTS`) where segmented (scans).
         points: named 3-D landmark points (``armpit_left``, ``shoulder_right`` …) of a scan.
         arm_cut: x of the vertical arm-root plane per side (``left`` > 0, ``right`` < 0).
+        limbs: ``arm_left`` … ``leg_right`` -> :class:`~.limbs.Limb` (centreline, sections,
+            joints) of a scan; ``limb_problems`` says why a limb is missing.
     """
 
     vertices: Array
@@ -52,6 +54,8 @@ class BodySurface:
     part: npt.NDArray[np.int32] | None = None
     points: dict[str, Array] = field(default_factory=dict)
     arm_cut: dict[str, float] = field(default_factory=dict)
+    limbs: dict[str, Any] = field(default_factory=dict)
+    limb_problems: dict[str, str] = field(default_factory=dict)
 
     def triangles_of(self, name: str) -> npt.NDArray[np.int64]:
         """Indices of the triangles of a named region; :class:`MissingRegion` if absent."""

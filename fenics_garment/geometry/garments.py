@@ -47,6 +47,7 @@ from .body import BodySurface
 from .errors import GeometryError, MissingRegion
 from .garment_checks import check_garment
 from .gmsh_utils import GMSH_TIME_LIMIT, gmsh_session, time_limit, to_dolfinx
+from .limbs import Limb
 from .mannequin import add_loft
 
 Array = npt.NDArray[np.float64]
@@ -91,6 +92,15 @@ class GarmentSurface:
     levels: list[GarmentLevel]
     meshdata: Any = None
     info: dict[str, float] = field(default_factory=dict)
+    #: the limb a sleeve or stocking follows on a scan (:class:`~.limbs.Limb`), or None
+    frame: Any = None
+
+    def axial(self, points: Array) -> Array:
+        """The garment's level coordinate of points: their height, or on a limb of a scan the
+        distance z' along its centreline (:meth:`~.limbs.Limb.axial`), as ``levels[i].z``."""
+        if self.frame is None:
+            return np.asarray(points)[:, 2]
+        return self.frame.axial(points)
 
     # -- DOLFINx side -------------------------------------------------------------------------
     @property
@@ -244,14 +254,16 @@ def _garment_section(
 
 
 def _levels_from(
-    body: BodySurface,
+    body: BodySurface | Limb,
     names: list[str],
     ease: dict[str, float],
     min_clearance: float | None,
     extra: dict[str, tuple[float, str, float]] | None = None,
 ) -> tuple[dict[str, tuple[float, Array]], list[GarmentLevel]]:
     """Garment sections for body levels ``names`` (bottom to top); ``extra`` adds levels
-    ``name -> (z, copy_of_level, extra_clearance)`` that reuse another level's body section."""
+    ``name -> (z, copy_of_level, extra_clearance)`` that reuse another level's body section.
+    ``body`` is anything with ``section(level) -> (z, points)``: a body, or a scan's limb in
+    its straightened coordinates."""
     out: dict[str, tuple[float, Array]] = {}
     table: list[GarmentLevel] = []
     for name in names:
@@ -456,15 +468,7 @@ def _extract(g, kind, panels, edges, panel_faces, curves) -> dict[str, Any]:
             _, _, en = g.model.mesh.getElements(1, c)
             pairs.append(en[0].astype(np.int64).reshape(-1, 2) - 1)
         edge_nodes[name] = np.concatenate(pairs)
-    # outward vertex normals (area weighted) and the warp
-    p = x[cells_a]
-    nc = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    if cells_a.shape[1] == 4:
-        nc = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
-    normal = np.zeros_like(x)
-    for j in range(cells_a.shape[1]):
-        np.add.at(normal, cells_a[:, j], nc)
-    normal /= np.linalg.norm(normal, axis=1)[:, None] + 1e-300
+    normal = nodal_normals(x, cells_a)
     return {
         "kind": kind,
         "points": x,
@@ -478,14 +482,27 @@ def _extract(g, kind, panels, edges, panel_faces, curves) -> dict[str, Any]:
     }
 
 
-def warp_direction(normal: Array, along: tuple[float, float, float] = (0.0, 0.0, 1.0)) -> Array:
-    """Unit tangent closest to ``along`` (vertical by default) at each node.
+def nodal_normals(x: Array, cells: npt.NDArray[np.int64]) -> Array:
+    """Area-weighted unit vertex normals of a triangle or quadrilateral mesh (cell order)."""
+    p = x[cells]
+    nc = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    if cells.shape[1] == 4:
+        nc = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
+    normal = np.zeros_like(x)
+    for j in range(cells.shape[1]):
+        np.add.at(normal, cells[:, j], nc)
+    return normal / (np.linalg.norm(normal, axis=1)[:, None] + 1e-300)
+
+
+def warp_direction(normal: Array, along: Any = (0.0, 0.0, 1.0)) -> Array:
+    """Unit tangent closest to ``along`` (vertical by default; one vector, or one per node) at
+    each node.
 
     Where the surface is nearly horizontal (the tangential part of ``along`` shorter than 0.2)
     the fabric's warp is taken front-to-back (the y axis projected) instead.
     """
-    a = np.asarray(along, dtype=float)
-    w = a - (normal @ a)[:, None] * normal
+    a = np.broadcast_to(np.asarray(along, dtype=float), normal.shape)
+    w = a - np.einsum("ij,ij->i", normal, a)[:, None] * normal
     flat = np.linalg.norm(w, axis=1) < 0.2
     ey = np.array([0.0, 1.0, 0.0])
     w[flat] = ey - (normal[flat] @ ey)[:, None] * normal[flat]
@@ -497,8 +514,13 @@ def _finish(
     comm: Any | None,
     build: Any,
     table: list[GarmentLevel],
+    frame: Any = None,
 ) -> GarmentSurface:
-    """Run ``build(g)`` on rank 0 in a gmsh session, share the arrays, make the DOLFINx mesh."""
+    """Run ``build(g)`` on rank 0 in a gmsh session, share the arrays, make the DOLFINx mesh.
+
+    With a ``frame`` (a :class:`~.limbs.Limb`) the garment is built and checked in the limb's
+    straightened coordinates and then mapped onto the limb (:func:`_onto_limb`).
+    """
     import time
 
     t0 = time.perf_counter()
@@ -510,6 +532,8 @@ def _finish(
                     data = build(g)
                 check_garment(kind, data["points"], data["cells"], [lv.z for lv in table],
                               max(lv.garment_girth for lv in table))  # fmt: skip
+                if frame is not None:
+                    data = _onto_limb(kind, data, frame)
             except GeometryError as e:
                 err = str(e)
             except Exception as e:  # gmsh raises a bare Exception with its last error
@@ -524,8 +548,49 @@ def _finish(
                 meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
             except RuntimeError as e:  # e.g. "Duplicate mesh entity detected"
                 raise GeometryError(f"DOLFINx refused the {kind} mesh: {_first_line(e)}") from e
+            if frame is not None:  # every node (edge nodes of a curved mesh too) onto the limb
+                x = meshdata.mesh.geometry.x
+                x[:] = frame.to_world(x)
     data["info"] = {"seconds": time.perf_counter() - t0, "cells": len(data["cells"])}
-    return GarmentSurface(levels=table, meshdata=meshdata, **data)
+    return GarmentSurface(levels=table, meshdata=meshdata, frame=frame, **data)
+
+
+def _onto_limb(kind: str, data: dict[str, Any], limb: Any) -> dict[str, Any]:
+    """Map a garment built in a limb's straightened coordinates onto the limb: the points by
+    :meth:`~.limbs.Limb.to_world`, the normals recomputed, the warp along the limb's axis.
+
+    Each section plane is moved rigidly, so girths are kept; lengths along the limb change by
+    1 − κ r cos φ on a centreline of curvature κ (the inside of a bent elbow is shorter), so a
+    curvature radius below the section's radius would fold the garment: refused here.
+    """
+    from .garment_checks import MAX_TURN, largest_turn
+
+    straight = data["points"]
+    x = limb.to_world(straight)
+    turn = largest_turn(x, data["cells"])
+    if turn > MAX_TURN:
+        raise GeometryError(
+            f"the {kind} folds where it follows the {limb.name.replace('_', ' ')} "
+            f"(cells turn by {turn:.0f}°): the limb bends too sharply for it"
+        )
+    normal = nodal_normals(x, data["cells"])
+    return {**data, "points": x, "normal": normal,
+            "warp": warp_direction(normal, limb.axis_at(straight))}  # fmt: skip
+
+
+def _limb_source(body: Any, kind: str, side: str) -> tuple[Any, Any]:
+    """What a sleeve (``kind = "arm"``) or stocking (``"leg"``) is cut from, and its frame: on
+    a scan the limb followed along its centreline (:mod:`.limbs`), else the body itself."""
+    if side not in ("left", "right"):
+        raise GeometryError(f"side must be 'left' or 'right', got {side!r}")
+    limbs = getattr(body, "limbs", None) or {}
+    if not limbs:
+        return body, None
+    name = f"{kind}_{side}"
+    if name not in limbs:
+        why = getattr(body, "limb_problems", {}).get(name, f"no {kind} found on the {side}")
+        raise GeometryError(f"no {side} {kind} to build on: {why}")
+    return limbs[name], limbs[name]
 
 
 def _first_line(e: BaseException) -> str:
@@ -773,18 +838,23 @@ def make_stocking(
     Default ease (−20 % ankle … −10 % thigh) is our illustrative graduation, not a class of a
     compression standard. ``per_turn``: elements per turn of curvature (at most ``h``), the
     resolution of the leg's round sections (:func:`_mesh_options`).
+
+    On a mannequin the levels are horizontal sections of the leg; on a scan the leg's own
+    (:mod:`.limbs`): the stocking is built around the ``side`` leg's centreline from its
+    perpendicular sections and mapped onto it (:func:`_onto_limb`).
     """
+    src, frame = _limb_source(body, "leg", side)
     e = _ease_dict(ease, STOCKING_EASE)
     lv = ["ankle", "calf", "knee", "thigh"]
     e = {f"{k}_{side}": v for k, v in e.items()}
-    z_a, z_t = body.landmarks["ankle"], body.landmarks["thigh"]
+    z_a, z_t = src.landmarks["ankle"], src.landmarks["thigh"]
     extra = {
         "hem": (z_a - 0.015, f"ankle_{side}", 0.0),
         "welt": (z_t + 0.02, f"thigh_{side}", 0.0),
     }
     e["hem"], e["welt"] = e[f"ankle_{side}"], e[f"thigh_{side}"]
     names = ["hem", *[f"{k}_{side}" for k in lv], "welt"]
-    levels, table = _levels_from(body, names, e, min_clearance, extra)
+    levels, table = _levels_from(src, names, e, min_clearance, extra)
     x_mid = float(np.mean([p[:, 0].mean() for _, p in levels.values()]))
     cls = _TubeClassifier(levels["hem"][0], levels["welt"][0], "welt", x_mid)
     return _finish(
@@ -794,9 +864,13 @@ def make_stocking(
             g, "stocking", levels, [], cls, h, quads, per_circle=per_turn, order=order
         ),
         table,
+        frame,
     )
 
 
+#: a scan's sleeve hem lies this far [m] below the wrist: the hand widens right after the
+#: narrowest section (MakeHuman: +14 % girth 2 cm beyond it, tests/test_scan_makehuman.py)
+HAND_CLEARANCE = 0.005
 SLEEVE_EASE = {"wrist": -0.07, "forearm": -0.065, "elbow": -0.06, "upper_arm": -0.055}
 
 
@@ -810,26 +884,37 @@ def make_sleeve(
     quads: bool = False,
     order: int = 2,
     comm: Any | None = None,
+    side: str = "left",
+    hem_end: float | None = None,
 ) -> GarmentSurface:
-    """A compression sleeve on an arm from :func:`~.mannequin.make_arm`, from ``end`` below the
-    wrist (edge ``hem``) to ``end`` above the upper-arm level (edge ``top``), ease per level.
+    """A compression sleeve on an arm, from ``hem_end`` below the wrist (edge ``hem``) to
+    ``end`` above the upper-arm level (edge ``top``), ease per level.
 
-    The end sections repeat the wrist's and the upper arm's (the arm's stubs are prismatic), so
-    the levels themselves lie ``end`` away from the free edges. Default ease (−7 % wrist …
-    −5.5 % upper arm) is our illustrative graduation, not a compression class. ``per_turn``:
-    elements per turn of curvature (at most ``h``; :func:`_mesh_options`).
+    The arm is the body from :func:`~.mannequin.make_arm` (its levels are horizontal sections;
+    ``side`` is not used), or the ``side`` arm of a scan, followed along its own centreline
+    (:mod:`.limbs`: the sleeve is built from the arm's perpendicular sections and mapped onto
+    it, :func:`_onto_limb`). The end sections repeat the wrist's and the upper arm's (the
+    parametric arm's stubs are prismatic), so the levels lie ``end`` away from the free edges.
+    ``hem_end`` defaults to ``end`` on the parametric arm and to ``HAND_CLEARANCE`` on a scan,
+    whose hand widens right after the wrist (the narrowest section). Default ease (−7 % wrist
+    … −5.5 % upper arm) is our illustrative graduation, not a compression class.
+    ``per_turn``: elements per turn of curvature (at most ``h``; :func:`_mesh_options`).
     """
+    src, frame = _limb_source(body, "arm", side)
+    if hem_end is None:
+        hem_end = end if frame is None else HAND_CLEARANCE
     e = _ease_dict(ease, SLEEVE_EASE)
-    z_w, z_u = body.landmarks["wrist"], body.landmarks["upper_arm"]
-    extra = {"hem": (z_w - end, "wrist", 0.0), "top": (z_u + end, "upper_arm", 0.0)}
+    z_w, z_u = src.landmarks["wrist"], src.landmarks["upper_arm"]
+    extra = {"hem": (z_w - hem_end, "wrist", 0.0), "top": (z_u + end, "upper_arm", 0.0)}
     names = ["hem", "wrist", "forearm", "elbow", "upper_arm", "top"]
-    levels, table = _levels_from(body, names, e, min_clearance, extra)
+    levels, table = _levels_from(src, names, e, min_clearance, extra)
     cls = _TubeClassifier(levels["hem"][0], levels["top"][0])
     return _finish(
         "sleeve",
         comm,
         lambda g: _build(g, "sleeve", levels, [], cls, h, quads, per_circle=per_turn, order=order),
         table,
+        frame,
     )
 
 

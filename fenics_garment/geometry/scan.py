@@ -156,10 +156,13 @@ def load_scan(
     t3 = time.perf_counter()
     report["landmarks"] = dict(anat.landmarks)
     report["girths"] = dict(anat.girths)
+    report["limbs"] = {n: dict(lb.marks) for n, lb in anat.limbs.items()}
     report["seconds"] = {"read": t1 - t0, "clean": t2 - t1, "anatomy": t3 - t2}
     body = finish_body(v, t, anat.landmarks, dict(anat.sections), part=anat.part)
     body.points = dict(anat.points)
     body.arm_cut = dict(anat.arm_cut)
+    body.limbs = dict(anat.limbs)
+    body.limb_problems = dict(anat.limb_problems)
     return body, report
 
 

@@ -71,7 +71,7 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
     if g.kind == "stocking":
         return gm.make_stocking(body, side=g.side, per_turn=g.per_turn, **kw)
     if g.kind == "sleeve":
-        return gm.make_sleeve(body, per_turn=g.per_turn, **kw)
+        return gm.make_sleeve(body, per_turn=g.per_turn, side=g.side, **kw)
     return gm.make_tube(body, **kw)
 
 

@@ -94,7 +94,7 @@ class GarmentConfig:
     fabric_overrides: dict[str, float] = field(default_factory=dict)  # e.g. thickness [m]
     mesh_size: float = 0.03  # target element size [m]
     element: str = "P2B-P2B"  # the verified element (shell.model.DEFAULT_ELEMENT)
-    side: str = "left"  # stocking leg
+    side: str = "left"  # the stocking's leg; on a scan also the sleeve's arm
     #: reference geometry: "curved" (order-2 mesh: geometry.garments, point 5), "straight"
     #: (order 1), or "auto" = curved for a P2 element, straight for P1
     geometry: str = "auto"
@@ -183,7 +183,7 @@ class Scene:
 BODY_KINDS = ("mannequin", "scan", "cylinder", "arm")
 GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
 #: The body kind each garment kind needs (the rest need a mannequin or a scan).
-GARMENT_BODY = {"tube": "cylinder", "sleeve": "arm"}
+GARMENT_BODY = {"tube": ("cylinder",), "sleeve": ("arm", "scan")}
 #: Levels that a per-level ease may name, per garment kind (others are not checked).
 _TORSO = ("hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder", "neck_base",
           "neck")  # fmt: skip
@@ -396,13 +396,14 @@ def _check(s: Scene) -> None:
         v = getattr(b, key)
         _require(v > 0, src, f"body.{key}", f"must be positive, got {v}")
     _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
-    needs = GARMENT_BODY.get(g.kind, "mannequin or scan")
-    ok = b.kind == needs if g.kind in GARMENT_BODY else b.kind in ("mannequin", "scan")
+    kinds = GARMENT_BODY.get(g.kind, ("mannequin", "scan"))
+    ok = b.kind in kinds
+    needs = " or ".join(kinds)
     an = "an" if needs[0] in "aeiou" else "a"
     msg = f"a {g.kind} needs {an} {needs} body (body.kind = {b.kind!r})"
     _require(ok, src, "garment.kind", msg)
+    _one_of(g.side, SIDES, src, "garment.side")
     if g.kind == "stocking":
-        _one_of(g.side, SIDES, src, "garment.side")
         _require(b.kind != "mannequin" or b.legs, src, "body.legs",
                  "a stocking on a mannequin needs legs = true")  # fmt: skip
     if isinstance(g.ease, dict) and g.kind in EASE_LEVELS:
