@@ -331,15 +331,7 @@ def test_limb_sections_against_a_direct_cut(scan):
     for name, limb in body.limbs.items():
         for level, s in limb.marks.items():
             p, tangent, _, _ = (x[0] for x in limb.frame_at(s))
-            d = (v - p) @ tangent
-            e = np.concatenate([t[:, [0, 1]], t[:, [1, 2]], t[:, [2, 0]]])
-            cross = d[e[:, 0]] * d[e[:, 1]] < 0
-            a, b = e[cross, 0], e[cross, 1]
-            w = d[a] / (d[a] - d[b])
-            q = v[a] + w[:, None] * (v[b] - v[a])
-            q = q[np.linalg.norm(q - p, axis=1) < 0.12]
-            basis = np.linalg.svd(np.eye(3) - np.outer(tangent, tangent))[0][:, :2]
-            direct = ConvexHull((q - p) @ basis).area
+            direct = _perpendicular_girth(v, t, p, tangent)
             own = ConvexHull(limb.sections[level]).area
             assert own == pytest.approx(direct, rel=0.01), (name, level)
     # the arm levels are ordered wrist < forearm < elbow < upper arm girth on this body
