@@ -20,10 +20,10 @@ Writes ``benchmarks/results/convergence.json`` and ``convergence-<scene>.png``.
 only the missing ones (e.g. a fourth level). ``--variant adaptive`` dresses with the adaptive
 schedule (``[dressing] schedule``; key ``<scene>:adaptive``).
 
-``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) separates the
-discretisation error from the dependence of a frictional answer on its loading path: with
-friction the final state depends on how the garment was put on, and the adaptive dressing
-takes different steps on each mesh.
+``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
+frictionless answer does not depend on the dressing path, so its convergence isolates the
+discretisation error of the shell and the contact from whatever shapes a frictional one (the
+path, the stick stiffness, the spring).
 """
 
 from __future__ import annotations
