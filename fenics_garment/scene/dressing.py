@@ -353,8 +353,9 @@ def dress(
             if not al.converged:
                 raise DressingFailed(
                     rep, 0.0,
-                    f"augmented Lagrangian: penetration {al.penetration[-1:]} m not below {tol} m "
-                    f"after {max_updates} multiplier updates" if al.penetration else
+                    f"augmented Lagrangian: penetration {al.penetration[-1]:.3g} m not below "
+                    f"{tol:.3g} m after {len(al.newton_iterations) - 1} multiplier updates "
+                    f"(penalty {al.kappa[-1]:.3g} Pa/m)" if al.penetration else
                     "augmented Lagrangian: the solve after the first multiplier update failed",
                 )  # fmt: skip
             st.accept_step()

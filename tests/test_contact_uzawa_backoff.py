@@ -1,0 +1,93 @@
+"""The augmented-Lagrangian loop's control flow when a raised penalty is more than Newton takes.
+
+A model problem replaces the shell: one contact point on a spring K under a load F, so the
+penetration at penalty κ with multiplier λ is g = (F − λ)/(K + κ) (exact), and Newton "fails"
+above a given penalty. The loop must go back to the last converged pass and go on there (plain
+Uzawa at fixed κ contracts by K/(K + κ) per update), not give up with the penetration above
+the tolerance.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from fenics_garment.contact import uzawa
+
+
+class _Field:
+    """What the loop touches of a DOLFINx Function: ``x.array`` and ``x.scatter_forward``."""
+
+    def __init__(self):
+        self.x = self
+        self.array = np.zeros(1)
+
+    def scatter_forward(self):
+        pass
+
+
+class _Constant:
+    def __init__(self, value: float):
+        self.value = value
+
+
+class _Point:
+    """One contact point on a spring K under a load F: g = −(F − λ)/(K + κ)."""
+
+    load, spring = 100.0, 100.0  # a stiff structure: plain Uzawa at κ = 1 barely contracts
+
+    def __init__(self):
+        self.gap, self.lam = _Field(), _Field()
+        self.refresh = lambda: None
+
+    def solve(self, kappa: float) -> None:
+        self.gap.array[:] = -(self.load - self.lam.array) / (self.spring + kappa)
+
+
+@pytest.fixture
+def point(monkeypatch):
+    def update(state, kappa, previous=None):  # plain Uzawa: λ ← ⟨λ − κ g⟩₊
+        state.lam.array[:] = np.maximum(state.lam.array - kappa * state.gap.array, 0.0)
+
+    monkeypatch.setattr(uzawa, "max_penetration", lambda state: float(-state.gap.array[0]))
+    monkeypatch.setattr(uzawa, "update_multiplier", update)
+    return _Point()
+
+
+def test_a_failed_raise_goes_back_and_converges_at_the_last_penalty(point):
+    kappa = _Constant(1.0)
+    largest = 500.0  # Newton "fails" above this penalty (the third raise, κ = 1000)
+
+    def solve():
+        if kappa.value > largest:
+            return 3, -3
+        point.solve(kappa.value)
+        return 3, 2
+
+    al = uzawa.augmented_lagrangian(
+        point, 1.0, solve, tol=1e-6, max_updates=40, stiffen=kappa, unknown=point.gap
+    )
+    assert al.converged
+    assert max(al.kappa) > largest  # a raise was tried and failed ...
+    assert al.kappa[-1] <= largest  # ... and the loop went on at the penalty that converged
+    assert al.penetration[-1] <= 1e-6
+    # at the exact solution the multiplier carries the load the spring does not
+    assert point.lam.array[0] == pytest.approx(point.load, rel=1e-5)
+
+
+def test_a_failure_at_a_converged_penalty_ends_the_loop(point):
+    kappa = _Constant(1.0)
+    calls = []
+
+    def solve():
+        calls.append(kappa.value)
+        if len(calls) == 3:
+            return 3, -3
+        point.solve(kappa.value)
+        return 3, 2
+
+    al = uzawa.augmented_lagrangian(
+        point, 1.0, solve, tol=1e-9, max_updates=20, stiffen=None, unknown=point.gap
+    )
+    assert not al.converged
+    assert len(calls) == 3
