@@ -149,6 +149,9 @@ class DressingConfig:
     spring_length: float = 0.03  # L [m] of the spring's scale E h / L²
     grow: float = 1.5  # step growth after an easy step (adaptive schedule)
     schedule: str = "fixed"
+    #: Coulomb friction while the body grows too (else it comes on at s = 0, module
+    #: :mod:`.dressing`): the spring alone then does not decide where the garment settles
+    friction_while_growing: bool = False
 
 
 @dataclass(frozen=True)

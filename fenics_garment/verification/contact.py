@@ -112,10 +112,15 @@ def _distort_tube_mesh(mesh, r0: float, L: float, n: tuple[int, int], amount: fl
     x[:, 0], x[:, 1], x[:, 2] = r0 * np.cos(tv), r0 * np.sin(tv), zv
 
 
-def tube_pressure(R_c: float, r0: float, s, *, warp: str = "axial", bending: bool = True):
+def tube_pressure(
+    R_c: float, r0: float, s, *, warp: str = "axial", bending: bool = True, stuck: bool = False
+):
     """Exact free-end pressure of a tight shell tube [Pa] (module docstring).
 
     ``s`` is the :class:`ShellStiffness`; with the warp along the axis the hoop is direction 2.
+    ``stuck``: the tube held axially by friction from the moment it touches (a tube dressed
+    with friction on while the body grows): its axial strain stays 0 instead of the free
+    contraction −(A_tz/A_zz) E, so the hoop force is A_tt E, not (A_tt − A_tz²/A_zz) E.
     """
     if warp == "axial":
         a_tt, a_zz, a_tz, d_tt = s.A22, s.A11, s.A12, s.D22
@@ -123,9 +128,9 @@ def tube_pressure(R_c: float, r0: float, s, *, warp: str = "axial", bending: boo
         a_tt, a_zz, a_tz, d_tt = s.A11, s.A22, s.A12, s.D11
     lam = R_c / r0
     e = (lam**2 - 1) / 2
-    e_zz = -a_tz / a_zz * e
+    e_zz = 0.0 if stuck else -a_tz / a_zz * e
     lz = np.sqrt(1 + 2 * e_zz)
-    S = (a_tt - a_tz**2 / a_zz) * e
+    S = a_tt * e + a_tz * e_zz
     p = (lam / lz) * S / R_c
     if bending:
         p += d_tt * (lam - 1) / (r0**2 * R_c) / lz
