@@ -14,11 +14,16 @@ regions.
 Writes ``benchmarks/results/convergence.json`` and ``convergence-<scene>.png``.
 
     python -m benchmarks.convergence [--quick] [scene ...] [--levels N] [--reuse]
-                                     [--variant friction-off|adaptive]
+                                     [--variant friction-off|adaptive|steps-8|…]
 
 ``--reuse`` keeps the stored completed runs of the same levels and dressing schedule and runs
 only the missing ones (e.g. a fourth level). ``--variant adaptive`` dresses with the adaptive
 schedule (``[dressing] schedule``; key ``<scene>:adaptive``).
+
+``--variant steps-8`` (8 grow steps), ``friction-growing`` (``[dressing]
+friction_while_growing``) and their combination ``friction-growing+steps-8`` measure the
+dressing path's part of a frictional answer: the same meshes with twice the grow steps, and
+with friction on while the body grows.
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the

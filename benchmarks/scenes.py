@@ -84,6 +84,11 @@ def child(spec: dict) -> dict:
         phys = replace(phys, gravity=False)
     if variant == "adaptive":  # the dressing path chosen by Newton on each mesh
         s = replace(s, dressing=replace(s.dressing, schedule="adaptive"))
+    for part in variant.split("+"):  # dressing-path studies (benchmarks/convergence.py)
+        if part.startswith("steps-"):  # steps-N: N grow steps instead of the scene's
+            s = replace(s, dressing=replace(s.dressing, steps=int(part[len("steps-") :])))
+        if part == "friction-growing":  # friction from the first grow step
+            s = replace(s, dressing=replace(s.dressing, friction_while_growing=True))
     if "body_surface" in spec:  # benchmarks/smooth_body.py
         phys = replace(phys, body_surface=spec["body_surface"])
     if "body_mesh_size" in spec:
