@@ -213,7 +213,7 @@ def dress(
     on_step: Callable[[DressStep], None] | None = None,
     on_failure: Callable[[float, int, int], None] | None = None,
     augmented_lagrangian: tuple[float, int] | None = None,
-    friction_while_dressing: bool = False,
+    friction_while_growing: bool = False,
     on_checkpoint: Callable[[Progress], None] | None = None,
     resume: Progress | None = None,
     schedule: str = "fixed",
@@ -227,7 +227,7 @@ def dress(
         margin: s₀ exceeds the deepest initial penetration by this [m].
         first_step: override the first step (as a fraction of s₀), e.g. to force a cut in tests.
         augmented_lagrangian: (tolerance [m], max updates) for Uzawa at s = 0, or None (penalty).
-        friction_while_dressing: keep Coulomb friction on while the body grows. Off by default:
+        friction_while_growing: keep Coulomb friction on while the body grows. Off by default:
             stick/slip switching at many points at once made Newton fail on the gilet, and the
             dressing path is artificial anyway (the body grows; nobody pulls the garment on).
             Friction is switched on at s = 0, where the slip since the last step is zero, so it
@@ -269,7 +269,7 @@ def dress(
         st.refresh()
     s0 = rep.shrink0
     grid = s0 / steps if first_step is None else first_step * s0  # the fixed schedule's step
-    if mu is not None and not friction_while_dressing and pr.stage == "grow":
+    if mu is not None and not friction_while_growing and pr.stage == "grow":
         mu.value = 0.0
     cuts = 0
     while pr.stage == "grow" and pr.shrink > 0.0:
