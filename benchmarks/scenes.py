@@ -89,6 +89,10 @@ def child(spec: dict) -> dict:
             s = replace(s, dressing=replace(s.dressing, steps=int(part[len("steps-") :])))
         if part == "friction-growing":  # friction from the first grow step
             s = replace(s, dressing=replace(s.dressing, friction_while_growing=True))
+        if part == "anchor-start":  # the spring pulls towards the garment as placed
+            s = replace(s, dressing=replace(s.dressing, spring_anchor="start"))
+        if part.startswith("release-"):  # release-R: spring factor R per release solve
+            s = replace(s, dressing=replace(s.dressing, release_ratio=float(part[8:])))
     if "body_surface" in spec:  # benchmarks/smooth_body.py
         phys = replace(phys, body_surface=spec["body_surface"])
     if "body_mesh_size" in spec:

@@ -15,7 +15,7 @@ import pytest
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import pressure as cpressure
-from fenics_garment.scene import config, dressing
+from fenics_garment.scene import config
 from fenics_garment.scene.run import run
 from fenics_garment.verification.contact import tube_pressure
 
@@ -75,7 +75,7 @@ def test_dressing_cuts_the_step_and_completes(tube_run):
 def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     """The fixed schedule (the default): with one schedule step (first_step = 1) each cut halves
     the way to the schedule point s = 0 (s₀/2, s₀/4, …, then 0 itself, never past it), and the
-    spring goes through c₀·4⁻ᵏ (FIXED_RATIO) until nothing moves, then 0."""
+    spring goes through c₀·4⁻ᵏ (release_ratio) until nothing moves, then 0."""
     rep = tube_run.report
     c0 = tube_run.built.regularisation.c0
     assert tube_run.summary["dressing_schedule"] == "fixed"
@@ -85,7 +85,7 @@ def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     release = [st for st in rep.steps if st.stage == "release"]
     cs = [st.regularisation for st in release]
     assert cs[-1] == 0.0 and release[-2].iterations == 0  # nothing moved: straight to c = 0
-    k = np.log(np.array(cs[:-1]) / c0) / np.log(dressing.FIXED_RATIO)
+    k = np.log(np.array(cs[:-1]) / c0) / np.log(config.DressingConfig.release_ratio)
     assert np.allclose(k, np.arange(len(cs) - 1), rtol=0, atol=1e-9), cs
 
 

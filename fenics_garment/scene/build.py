@@ -94,7 +94,8 @@ def make_fabric(scene: Scene) -> Fabric:
 
 @dataclass
 class Regularisation:
-    """Pseudo-time term Π_reg = ½ c |u − u_prev|² dA (u_prev: the last converged step).
+    """Pseudo-time term Π_reg = ½ c |u − u_prev|² dA (u_prev: the last converged step, or the
+    start of the dressing with ``anchor = "start"``).
 
     A garment held only by contact and friction has zero-stiffness modes while it is out of
     contact (the body is shrunk at the start of dressing). This spring to the previous step
@@ -108,9 +109,18 @@ class Regularisation:
     c0: float
     q_prev: dolfinx.fem.Function
     u_dofs: np.ndarray  # the displacement's dofs in q (collapsed once, not per step)
+    #: "previous": u_prev follows every converged step; "start": u_prev stays where
+    #: :meth:`place` put it (``DressingConfig.spring_anchor``)
+    anchor: str = "previous"
+
+    def place(self, q: dolfinx.fem.Function) -> None:
+        """Anchor the spring at the state ``q``."""
+        self.q_prev.x.array[:] = q.x.array
 
     def accept_step(self, q: dolfinx.fem.Function) -> None:
-        self.q_prev.x.array[:] = q.x.array
+        """A step converged at ``q``: the anchor follows it (``anchor = "previous"``) or stays."""
+        if self.anchor == "previous":
+            self.place(q)
 
     def stretch(self, q: dolfinx.fem.Function) -> float:
         """max |u − u_prev| over all ranks [m]."""
@@ -119,14 +129,14 @@ class Regularisation:
         return comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
 
 
-def add_regularisation(model: ShellModel, c0: float) -> Regularisation:
+def add_regularisation(model: ShellModel, c0: float, anchor: str = "previous") -> Regularisation:
     """Add the residual c (u − u_prev)·δu of :class:`Regularisation` to ``model``."""
     q_prev = dolfinx.fem.Function(model.Q, name="q_prev")
     c = dolfinx.fem.Constant(model.geometry.mesh, dolfinx.default_scalar_type(c0))
     v_u = ufl.split(ufl.TestFunction(model.Q))[0]
     u_prev = ufl.split(q_prev)[0]
     model.add_residual(c * ufl.dot(model.u - u_prev, v_u) * model.dx_full)
-    return Regularisation(c, c0, q_prev, model.Q.sub(0).collapse()[1])
+    return Regularisation(c, c0, q_prev, model.Q.sub(0).collapse()[1], anchor)
 
 
 @dataclass
@@ -210,7 +220,7 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     mu = contact.friction.mu if contact.friction else None
     d = scene.dressing
     c0 = d.regularisation * model.stiffness.membrane_scale / d.spring_length**2
-    reg = add_regularisation(model, c0)
+    reg = add_regularisation(model, c0, anchor=d.spring_anchor)
     return Built(scene, body, garment, model, contact, sbody, reg, [], mu, gravity)
 
 

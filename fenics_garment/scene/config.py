@@ -152,6 +152,14 @@ class DressingConfig:
     #: Coulomb friction while the body grows too (else it comes on at s = 0, module
     #: :mod:`.dressing`): the spring alone then does not decide where the garment settles
     friction_while_growing: bool = False
+    #: where the spring pulls towards: "previous" (the last converged solve: a pseudo-time
+    #: damper, so the garment drifts further with every solve) or "start" (the garment as placed
+    #: around the shrunk body: a spring, so the path has a limit as the steps are refined)
+    spring_anchor: str = "previous"
+    #: factor on the spring constant per release solve of the fixed schedule: c₀, c₀r, c₀r², …
+    #: down to 1e-5 c₀, then 0 (0.25: 10 solves, as many as the adaptive release took on the
+    #: gilets and the dress, 8–12)
+    release_ratio: float = 0.25
 
 
 @dataclass(frozen=True)
@@ -201,6 +209,7 @@ SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
 DRESSING_SCHEDULES = ("fixed", "adaptive")  # scene.dressing.dress
+SPRING_ANCHORS = ("previous", "start")  # scene.build.Regularisation
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
@@ -445,6 +454,9 @@ def _check(s: Scene) -> None:
     _require(d.spring_length > 0, src, "dressing.spring_length", "must be positive")
     _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
     _one_of(d.schedule, DRESSING_SCHEDULES, src, "dressing.schedule")
+    _one_of(d.spring_anchor, SPRING_ANCHORS, src, "dressing.spring_anchor")
+    _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
+             f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
              f"got {s.name!r}")  # fmt: skip

@@ -18,7 +18,7 @@ With friction the answer depends on the path (the anchors of sticking points are
 garment was when friction came on, moved by every solve since), so the path is part of the
 problem statement. ``schedule = "fixed"`` (the default) makes it the same on every mesh: the
 body grows through the shrinks s₀(1 − k/steps) and the spring is released through
-c₀·:data:`FIXED_RATIO`ᵏ, then 0; a failed solve inserts a sub-step on the way to the same
+c₀·rᵏ (``release_ratio`` r), then 0; a failed solve inserts a sub-step on the way to the same
 schedule point, so a mesh that needs one differs from the others only there (the records count
 them). ``"adaptive"`` lets the steps follow Newton (grow the step after an easy solve; the spring
 follows the force it still carries, :func:`_release`): fewer solves, but each mesh takes its own
@@ -39,7 +39,7 @@ import numpy as np
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import uzawa
-from fenics_garment.scene.config import DRESSING_SCHEDULES
+from fenics_garment.scene.config import DRESSING_SCHEDULES, DressingConfig
 from fenics_garment.solve import NONFINITE_REASON, NonlinearSolver, reason_name
 
 
@@ -217,6 +217,7 @@ def dress(
     on_checkpoint: Callable[[Progress], None] | None = None,
     resume: Progress | None = None,
     schedule: str = "fixed",
+    release_ratio: float = DressingConfig.release_ratio,
 ) -> DressReport:
     """Grow the body from s₀ back to 0 (see module doc); returns the :class:`DressReport`.
 
@@ -237,6 +238,8 @@ def dress(
         resume: continue from this progress; the caller has put the model's arrays back
             (``checkpoint.restore``). The same steps follow as in the uninterrupted run.
         schedule: ``"fixed"`` (the same path on every mesh) or ``"adaptive"`` (module doc).
+        release_ratio: factor on the spring constant per release solve of the fixed schedule
+            (:func:`_release`); its square root takes twice the solves along the same path.
     """
     if schedule not in DRESSING_SCHEDULES:
         raise ValueError(f"schedule must be one of {DRESSING_SCHEDULES}, got {schedule!r}")
@@ -257,7 +260,7 @@ def dress(
         pr = Progress(rep, "grow", s0, ds, c=reg.c0, mu=float(mu.value) if mu is not None else 0.0)
         st.shrink.value = s0
         reg.c.value = reg.c0
-        reg.accept_step(q)
+        reg.place(q)
         st.refresh()
         st.accept_step()
     else:
@@ -338,7 +341,9 @@ def dress(
         mu.value = pr.mu
     if pr.stage == "release":
         with _final_solves(solver):
-            _release(pr, built, solver, comm, on_step, on_checkpoint, fixed=fixed)
+            _release(
+                pr, built, solver, comm, on_step, on_checkpoint, fixed=fixed, ratio=release_ratio
+            )
         if augmented_lagrangian is not None:
             tol, max_updates = augmented_lagrangian
             with _final_solves(solver):
@@ -375,14 +380,16 @@ def _release(
     on_checkpoint: Callable[[Progress], None] | None = None,
     *,
     fixed: bool = False,
+    ratio: float = DressingConfig.release_ratio,
 ) -> None:
     """Pseudo-transient continuation at s = 0: solve, accept, weaken the spring, until c = 0.
 
-    With ``fixed`` the spring constants are c₀·:data:`FIXED_RATIO`ᵏ down to c₀·:data:`C_ZERO`,
-    then 0 (the same on every mesh); a failed solve is retried, every second time with a sub-step
-    half-way (in log c) from the last c that converged, after which the schedule goes on from the
-    c that failed; a solve that needs no Newton iteration (nothing moves, so the spring carries
-    no force) is followed by c = 0 at once. Otherwise (adaptive):
+    With ``fixed`` the spring constants are c₀·``ratio``ᵏ down to c₀·:data:`C_ZERO`, then 0 (the
+    same on every mesh); a failed solve is retried, every second time with a sub-step half-way
+    (in log c) from the last c that converged, after which the schedule goes on from the c that
+    failed; with the spring anchored at the previous step, a solve that needs no Newton
+    iteration (nothing moves, so the spring carries no force) is followed by c = 0 at once.
+    Otherwise (adaptive):
 
     The spring pulls towards the previous step, so each solve is an exact equilibrium up to the
     spring traction c |u − u_prev|; while the garment still moves (a loose skirt finding its
@@ -403,7 +410,7 @@ def _release(
     """
     if built.regularisation.c0 == 0.0:
         return
-    _release_loop(pr, built, solver, comm, on_step, on_checkpoint, fixed)
+    _release_loop(pr, built, solver, comm, on_step, on_checkpoint, fixed, ratio)
 
 
 @contextmanager
@@ -419,7 +426,9 @@ def _final_solves(solver: NonlinearSolver):
         solver.set_line_search(line_search)
 
 
-def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint, fixed) -> None:
+def _release_loop(
+    pr: Progress, built, solver, comm, on_step, on_checkpoint, fixed, ratio: float
+) -> None:
     model, contact, reg = built.model, built.contact, built.regularisation
     rep = pr.report
     while pr.solves < MAX_RELEASE_SOLVES:
@@ -471,10 +480,10 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint, fix
         elif fixed:
             if pr.c_target >= 0 and c > pr.c_target:  # a sub-step: back to the schedule
                 pr.c = pr.c_target
-            elif its == 0:  # nothing moved: the spring carries no force, the rest is a no-op
-                pr.c = 0.0
+            elif its == 0 and reg.anchor == "previous":  # nothing moved: the spring carries
+                pr.c = 0.0  # no force, the rest of the schedule is a no-op
             else:
-                pr.c = c * FIXED_RATIO if c * FIXED_RATIO >= C_ZERO * reg.c0 else 0.0
+                pr.c = c * ratio if c * ratio >= C_ZERO * reg.c0 else 0.0
             if pr.c_target >= 0 and pr.c <= pr.c_target:
                 pr.c_target = -1.0
         else:
@@ -491,9 +500,6 @@ def _release_loop(pr: Progress, built, solver, comm, on_step, on_checkpoint, fix
             return
 
 
-#: Factor on c per release solve of the fixed schedule: c₀, c₀/4, …, c₀·4⁻⁸ (≥ C_ZERO·c₀), 0 —
-#: 10 solves, as many as the adaptive release took on the gilets and the dress (8–12).
-FIXED_RATIO = 0.25
 #: Release schedule of :func:`_release`.
 #: A spring not released to 0 whose last weakening changed the pressure by less than this is
 #: reported as negligible (else the run warns).

@@ -539,7 +539,8 @@ def _dress(
                        grow=d.grow, first_step=first_step, on_step=on_step,
                        on_failure=on_failure, augmented_lagrangian=al,
                        on_checkpoint=write_ckpt, resume=progress, schedule=d.schedule,
-                       friction_while_growing=d.friction_while_growing)  # fmt: skip
+                       friction_while_growing=d.friction_while_growing,
+                       release_ratio=d.release_ratio)  # fmt: skip
     except DressingFailed as err:
         say("  " + str(err))
         return err.report, False, str(err)
