@@ -23,7 +23,10 @@ schedule (``[dressing] schedule``; key ``<scene>:adaptive``).
 ``--variant steps-8`` (8 grow steps), ``friction-growing`` (``[dressing]
 friction_while_growing``) and their combination ``friction-growing+steps-8`` measure the
 dressing path's part of a frictional answer: the same meshes with twice the grow steps, and
-with friction on while the body grows.
+with friction on while the body grows. ``anchor-start`` (``[dressing] spring_anchor``) anchors
+the dressing spring at the garment as placed instead of the previous solve, ``release-R`` takes
+the factor R per release solve (``release_ratio``) and ``spring-X`` the spring c₀ = X E h / L²
+(``regularisation``); any of these combine with ``+``.
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the

@@ -6,6 +6,7 @@ with the dressing forced to cut its first step, and the outputs read back.
 
 import csv
 import json
+import math
 import tempfile
 from dataclasses import replace
 from pathlib import Path
@@ -15,7 +16,7 @@ import pytest
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import pressure as cpressure
-from fenics_garment.scene import config
+from fenics_garment.scene import config, dressing
 from fenics_garment.scene.run import run
 from fenics_garment.verification.contact import tube_pressure
 
@@ -27,9 +28,12 @@ def _scene(**solver) -> config.Scene:
     # the faceted body and the straight-sided garment, whose dressing needs the 5 Newton
     # iterations the forced cut relies on (the shipped smooth body and curved garment need 3:
     # test_shipped_tube_obeys_laplace; the faceted body under a curved garment needs 22, its
-    # edge and centre points crossing the body's facet edges)
+    # edge and centre points crossing the body's facet edges). The spring to the previous step:
+    # anchored at the start (the default), the halved steps meet a shrink where a contact point
+    # crosses a facet edge, and no step small enough converges in 4 iterations there
     s = replace(s, physics=replace(s.physics, body_surface="faceted"),
-                garment=replace(s.garment, geometry="straight"))  # fmt: skip
+                garment=replace(s.garment, geometry="straight"),
+                dressing=replace(s.dressing, spring_anchor="previous"))  # fmt: skip
     return replace(s, solver=config.SolverConfig(petsc=solver)) if solver else s
 
 
@@ -75,7 +79,8 @@ def test_dressing_cuts_the_step_and_completes(tube_run):
 def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     """The fixed schedule (the default): with one schedule step (first_step = 1) each cut halves
     the way to the schedule point s = 0 (s₀/2, s₀/4, …, then 0 itself, never past it), and the
-    spring goes through c₀·4⁻ᵏ (release_ratio) until nothing moves, then 0."""
+    spring (anchored at the previous step) goes through c₀·rᵏ (r = release_ratio) until nothing
+    moves, then 0."""
     rep = tube_run.report
     c0 = tube_run.built.regularisation.c0
     assert tube_run.summary["dressing_schedule"] == "fixed"
@@ -85,8 +90,13 @@ def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     release = [st for st in rep.steps if st.stage == "release"]
     cs = [st.regularisation for st in release]
     assert cs[-1] == 0.0 and release[-2].iterations == 0  # nothing moved: straight to c = 0
+    _assert_release_schedule(cs, c0)
+
+
+def _assert_release_schedule(cs: list[float], c0: float) -> None:
+    """The spring constants of the release solves are c₀·rᵏ, k = 0, 1, …, then 0."""
     k = np.log(np.array(cs[:-1]) / c0) / np.log(config.DressingConfig.release_ratio)
-    assert np.allclose(k, np.arange(len(cs) - 1), rtol=0, atol=1e-9), cs
+    assert cs[-1] == 0.0 and np.allclose(k, np.arange(len(cs) - 1), rtol=0, atol=1e-9), cs
 
 
 def test_pressure_obeys_laplace(tube_run):
@@ -109,6 +119,14 @@ def test_shipped_tube_obeys_laplace(h):
     assert res.completed and res.summary["geometry_degree"] == 2
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
     assert res.regions[0]["mean_kPa"] == pytest.approx(_laplace(res) * 1e-3, rel=0.02)
+    # the spring anchored at the start carries force until it is gone: the release takes every
+    # c₀·rᵏ ≥ 10⁻⁵ c₀ and then 0 (none is skipped as "nothing moved")
+    reg = res.built.regularisation
+    assert reg.anchor == "start"
+    cs = [st.regularisation for st in res.report.steps if st.stage == "release"]
+    r = config.DressingConfig.release_ratio
+    assert len(cs) - 1 == math.floor(math.log(dressing.C_ZERO) / math.log(r)) + 1
+    _assert_release_schedule(cs, reg.c0)
 
 
 def test_tube_with_friction_while_growing_obeys_laplace():

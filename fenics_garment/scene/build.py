@@ -20,7 +20,7 @@ from fenics_garment.contact.smooth import SmoothBody
 from fenics_garment.geometry import garments as gm
 from fenics_garment.geometry.body import BodySurface
 from fenics_garment.materials import Fabric, fabric
-from fenics_garment.scene.config import Scene
+from fenics_garment.scene.config import DressingConfig, Scene
 from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ELEMENTS, ShellModel
 
@@ -94,14 +94,16 @@ def make_fabric(scene: Scene) -> Fabric:
 
 @dataclass
 class Regularisation:
-    """Pseudo-time term Π_reg = ½ c |u − u_prev|² dA (u_prev: the last converged step, or the
-    start of the dressing with ``anchor = "start"``).
+    """Dressing spring Π_reg = ½ c |u − u_a|² dA, anchored at u_a: the garment as placed at the
+    start of the dressing (``anchor = "start"``) or the last converged step (``"previous"``).
 
     A garment held only by contact and friction has zero-stiffness modes while it is out of
-    contact (the body is shrunk at the start of dressing). This spring to the previous step
-    removes them; it does no work at a converged equilibrium that does not move, and the
-    dressing drives c to 0 on the final solve, so the answer is not biased (STACK.md: a spring
-    to the previous step, unlike one to zero, leaves the exact solution unchanged). Where the
+    contact (the body is shrunk at the start of dressing). The spring removes them, and the
+    dressing drives c to 0 on the final solve, so the answer is an equilibrium without it. With
+    friction the answer depends on the path, and the anchor decides whether the path has a limit
+    as its steps are refined: anchored at the start, each state of the dressing is an
+    equilibrium of one problem with parameters (s, c); anchored at the previous step, the spring
+    is a damper and each solve lets the garment drift further (:mod:`.dressing`). Where the
     release fails, c · :meth:`stretch` bounds the traction the spring still carries.
     """
 
@@ -111,7 +113,7 @@ class Regularisation:
     u_dofs: np.ndarray  # the displacement's dofs in q (collapsed once, not per step)
     #: "previous": u_prev follows every converged step; "start": u_prev stays where
     #: :meth:`place` put it (``DressingConfig.spring_anchor``)
-    anchor: str = "previous"
+    anchor: str = DressingConfig.spring_anchor
 
     def place(self, q: dolfinx.fem.Function) -> None:
         """Anchor the spring at the state ``q``."""
@@ -123,13 +125,15 @@ class Regularisation:
             self.place(q)
 
     def stretch(self, q: dolfinx.fem.Function) -> float:
-        """max |u − u_prev| over all ranks [m]."""
+        """max |u − u_a| over all ranks [m]."""
         moved = np.abs(q.x.array[self.u_dofs] - self.q_prev.x.array[self.u_dofs])
         comm = q.function_space.mesh.comm
         return comm.allreduce(float(moved.max()) if len(moved) else 0.0, op=MPI.MAX)
 
 
-def add_regularisation(model: ShellModel, c0: float, anchor: str = "previous") -> Regularisation:
+def add_regularisation(
+    model: ShellModel, c0: float, anchor: str = DressingConfig.spring_anchor
+) -> Regularisation:
     """Add the residual c (u − u_prev)·δu of :class:`Regularisation` to ``model``."""
     q_prev = dolfinx.fem.Function(model.Q, name="q_prev")
     c = dolfinx.fem.Constant(model.geometry.mesh, dolfinx.default_scalar_type(c0))

@@ -150,12 +150,12 @@ class DressingConfig:
     grow: float = 1.5  # step growth after an easy step (adaptive schedule)
     schedule: str = "fixed"
     #: Coulomb friction while the body grows too (else it comes on at s = 0, module
-    #: :mod:`.dressing`): the spring alone then does not decide where the garment settles
-    friction_while_growing: bool = False
-    #: where the spring pulls towards: "previous" (the last converged solve: a pseudo-time
-    #: damper, so the garment drifts further with every solve) or "start" (the garment as placed
-    #: around the shrunk body: a spring, so the path has a limit as the steps are refined)
-    spring_anchor: str = "previous"
+    #: :mod:`.dressing`; the Laplace-verified scenes, tube and limbs, switch it on at s = 0)
+    friction_while_growing: bool = True
+    #: where the spring pulls towards: "start" (the garment as placed around the shrunk body:
+    #: a spring, so the path has a limit as the steps are refined) or "previous" (the last
+    #: converged solve: a pseudo-time damper, so the garment drifts further with every solve)
+    spring_anchor: str = "start"
     #: factor on the spring constant per release solve of the fixed schedule: c₀, c₀r, c₀r², …
     #: down to 1e-5 c₀, then 0 (0.25: 10 solves, as many as the adaptive release took on the
     #: gilets and the dress, 8–12)

@@ -8,11 +8,19 @@ contact point is then outside it — and s is driven back to 0 (``ContactState.s
 after ``max_cuts`` halvings in a row :class:`DressingFailed` is raised, with the last converged
 state left in the model and the report of the steps so far.
 
-The pseudo-time regularisation (:class:`~fenics_garment.scene.build.Regularisation`) is on at c₀
+The regularising spring (:class:`~fenics_garment.scene.build.Regularisation`) is on at c₀
 during the steps (fading it with the shrink made Newton fail near s = 0 on the gilet), then
-released at s = 0 by pseudo-transient continuation (:func:`_release`): solves with a weaker
-spring each time until c = 0. The answer is the c = 0 state and the pressure change of the last
-release solve is reported as the regularisation's effect.
+released at s = 0: solves with a weaker spring each time until c = 0. The answer is the c = 0
+state and the pressure change of the last release solve is reported as the regularisation's
+effect. By default the spring pulls towards the garment as it was placed around the shrunk body
+(``spring_anchor = "start"``): the dressing is then a quasi-static path of one problem, the
+body's shrink s and the spring c its parameters, and refining its steps converges (cotton gilet,
+35 mm, friction while growing, 4 / 8 / 16 grow steps: underbust mean 0.1401 / 0.1402 / 0.1400
+kPa). A spring to the previous solve (``"previous"``, the older default) is a pseudo-time
+damper instead: every solve lets the garment drift a little further under gravity and the
+garment's own forces, so the answer followed the number of solves with no limit (same gilet,
+4 / 8 / 16 / 32 steps: 0.139 / 0.131 / 0.113 / 0.081 kPa; record ``cotton_gilet:friction-growing
++steps-N`` in ``benchmarks/results/convergence.json``).
 
 With friction the answer depends on the path (the anchors of sticking points are where the
 garment was when friction came on, moved by every solve since), so the path is part of the
@@ -213,7 +221,7 @@ def dress(
     on_step: Callable[[DressStep], None] | None = None,
     on_failure: Callable[[float, int, int], None] | None = None,
     augmented_lagrangian: tuple[float, int] | None = None,
-    friction_while_growing: bool = False,
+    friction_while_growing: bool = DressingConfig.friction_while_growing,
     on_checkpoint: Callable[[Progress], None] | None = None,
     resume: Progress | None = None,
     schedule: str = "fixed",
@@ -228,11 +236,11 @@ def dress(
         margin: s₀ exceeds the deepest initial penetration by this [m].
         first_step: override the first step (as a fraction of s₀), e.g. to force a cut in tests.
         augmented_lagrangian: (tolerance [m], max updates) for Uzawa at s = 0, or None (penalty).
-        friction_while_growing: keep Coulomb friction on while the body grows. Off by default:
-            stick/slip switching at many points at once made Newton fail on the gilet, and the
-            dressing path is artificial anyway (the body grows; nobody pulls the garment on).
-            Friction is switched on at s = 0, where the slip since the last step is zero, so it
-            holds the garment where it was put (against gravity) for the final solves.
+        friction_while_growing: keep Coulomb friction on while the body grows (the default:
+            friction acts while a garment goes on). Off, friction is switched on at s = 0,
+            where the slip since the last step is zero, so it holds the garment where the
+            frictionless growth put it: the free-end hoop equilibrium of Laplace's law that the
+            tube and limb scenes verify.
         on_checkpoint: called with the :class:`Progress` after every converged solve (the model
             then holds the converged state), e.g. to write a checkpoint.
         resume: continue from this progress; the caller has put the model's arrays back
