@@ -11,7 +11,8 @@
   vs the term assembled with μ = 0; no gravity term vs the term with g = 0; compiled forms and
   the sparsity pattern reused between steps vs rebuilt (measured: cost of one rebuild × solves).
 * ``peer``: FEniCSx-Shells' Naghdi semi-cylinder demo, adapted at run time in a temporary folder
-  by a few text substitutions of our own (never stored here), against our semi-cylinder case.
+  by a few text substitutions of our own (never stored here), against our semi-cylinder case;
+  the peer's git directory comes from ``FENICSX_SHELLS_GIT`` (skipped with a message if unset).
 * ``release``: both gilets (cotton, nylon) at garment mesh sizes around the demo's 15 mm: does
   the dressing release its stabilising spring to c = 0 on every mesh, at what cost, and how much
   do the region pressures move from one mesh to the next (a garment-mesh sensitivity)?
@@ -49,7 +50,9 @@ RELEASE_SIZES = {"quick": [0.015], "default": [0.014, 0.0145, 0.015, 0.0155, 0.0
 NYLON = ROOT / "demos" / "nylon_gilet.toml"
 SINK = None  # called with every finished record (the main loop saves scenes.json there)
 MPIEXEC = Path(sys.executable).parent / "mpiexec"
-PEER_GIT = Path("/work/.mirror/FEniCS-Shells+fenicsx-shells/repo")
+#: FEniCSx-Shells: a git directory (a bare mirror or a checkout's .git) given by the environment
+#: variable FENICSX_SHELLS_GIT; the peer part is skipped, with a message, when it is not set
+PEER_ENV = "FENICSX_SHELLS_GIT"
 PEER_DEMO = "demo/demo_nonlinear-naghdi-clamped-semicylinder.py"
 
 
@@ -420,10 +423,14 @@ def peer(mode: str, say) -> list[dict]:
     n_peer = 8 if mode == "quick" else 20
     recs: list[dict] = []
     ref = 1.71505  # Sze et al. 2004, Table 7: w at the load, P = 2000 (as in our case)
+    git = os.environ.get(PEER_ENV, "")
     try:
-        src = subprocess.run(["git", "--git-dir", str(PEER_GIT), "show", f"HEAD:{PEER_DEMO}"],
+        if not git:
+            raise OSError(f"peer skipped: set {PEER_ENV} to a FEniCSx-Shells git directory")
+        src = subprocess.run(["git", "--git-dir", git, "show", f"HEAD:{PEER_DEMO}"],
                              capture_output=True, text=True, check=True).stdout  # fmt: skip
     except (OSError, subprocess.CalledProcessError) as err:
+        say(f"  {err}")
         recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells",
                      "status": "peer unavailable", "error": str(err)[:200],
                      "loadavg": os.getloadavg()})  # fmt: skip
@@ -459,7 +466,7 @@ def peer(mode: str, say) -> list[dict]:
 
 
 def _peer_commit() -> str:
-    p = subprocess.run(["git", "--git-dir", str(PEER_GIT), "rev-parse", "HEAD"],
+    p = subprocess.run(["git", "--git-dir", os.environ[PEER_ENV], "rev-parse", "HEAD"],
                        capture_output=True, text=True)  # fmt: skip
     return p.stdout.strip()
 
