@@ -7,7 +7,7 @@ garment mesh sizes h₀, h₀/√2, h₀/2, … (the ratio of the issue "Trustwo
 with the scene's element and contact as shipped. For every region and statistic the last three
 levels give :func:`fenics_garment.scene.error_bars.three_level` (observed order, extrapolated
 value, grid convergence index of each level). The scene's own ``--error-bars`` estimate at a
-level (Richardson with h and 2h, rate 1) is set beside the three-level error there, so the two
+level (Richardson with h and √2 h, rate 1) is set beside the three-level error there, so the two
 can be compared; the record says which level meets the ±3 % target for the p95 of the key
 regions.
 
@@ -133,10 +133,11 @@ def analyse(recs: list[dict]) -> dict:
             row[s] = conv.as_dict()
             rel = [e / abs(v) if v else math.inf for e, v in zip(conv.error, vals, strict=True)]
             row[s]["relative_error"] = rel
-            # the scene's own --error-bars estimate at each level with a 2h level in the set
+            # the scene's own --error-bars estimate at each level (its coarse level: the one
+            # before, √2 h)
             own = [math.nan] * len(vals)
-            for k in range(2, len(vals)):
-                own[k] = richardson_error(vals[k], vals[k - 2])
+            for k in range(1, len(vals)):
+                own[k] = richardson_error(vals[k], vals[k - 1])
             row[s]["error_bars_estimate"] = own
         if row:
             out["regions"][name] = row
@@ -157,7 +158,7 @@ def markdown(d: dict) -> str:
     out = ["Garment-mesh convergence (`python -m benchmarks.convergence`): per scene the runs, "
            "then per region the p95 [kPa] on each mesh, the observed order (nan: not monotone), "
            "the finest value's uncertainty (`scene.error_bars.three_level`) and the scene's own "
-           "`--error-bars` estimate at the finest mesh (h against 2h, rate 1).", ""]  # fmt: skip
+           "`--error-bars` estimate at the finest mesh (h against √2 h, rate 1).", ""]  # fmt: skip
     for stem, sc in d.get("scenes", {}).items():
         ana = sc.get("analysis", {})
         runs = [r for r in sc.get("runs", []) if r.get("status") == "ok"]

@@ -236,7 +236,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_run.add_argument("--check", action="store_true", help="only validate (as `check`)")
     p_run.add_argument("--error-bars", action="store_true",
-                       help="also solve on a 2x coarser garment mesh first: a Richardson "
+                       help="also solve on a sqrt(2)x coarser garment mesh first: a Richardson "
                        "error bar on every region's pressure ([output] error_bars)")  # fmt: skip
     p_run.set_defaults(func=_cmd_run)
 

@@ -29,10 +29,16 @@ from fenics_garment.scene.run import run
 def test_richardson_error_recovers_a_manufactured_error():
     # Q_h = Q + C h^r with Q = 1, C = 3, r = 2, h = 0.1: the estimate is the exact error
     q, c, h = 1.0, 3.0, 0.1
-    fine, coarse = q + c * h**2, q + c * (2 * h) ** 2
+    rho = error_bars.RATIO
+    fine, coarse = q + c * h**2, q + c * (rho * h) ** 2
     assert error_bars.richardson_error(fine, coarse, rate=2.0) == pytest.approx(c * h**2)
-    # the default r = 1 is three times larger: conservative
-    assert error_bars.richardson_error(fine, coarse) == pytest.approx(3 * c * h**2)
+    # the default r = 1 is (ρ² − 1)/(ρ − 1) = 1 + ρ ≈ 2.4 times larger: conservative
+    assert error_bars.richardson_error(fine, coarse) == pytest.approx((1 + rho) * c * h**2)
+    # on meshes h and 2h (ratio=2) the same formula is the classical (Q_h − Q_2h)/(2^r − 1)
+    coarse2 = q + c * (2 * h) ** 2
+    assert error_bars.richardson_error(fine, coarse2, rate=2.0, ratio=2.0) == pytest.approx(
+        c * h**2
+    )
 
 
 def test_comfort_range_names_the_bands_the_bar_touches():
