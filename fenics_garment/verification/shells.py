@@ -378,6 +378,18 @@ def pinched_semicylinder(
 HINGED_ROOF_LIMIT = {12.7: (0.7421 * 3000.0, 11.293), 6.35: (0.1953 * 3000.0, 12.892)}
 
 
+def first_limit_point(P: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """The first local maximum of the load P along a traced path (P, w), refined by the vertex
+    of the parabola P(w) through the largest sampled value and its two neighbours."""
+    i = next((k for k in range(1, len(P) - 1) if P[k + 1] < P[k]), int(np.argmax(P)))
+    if 0 < i < len(P) - 1:
+        c2, c1, c0 = np.polyfit(w[i - 1 : i + 2], P[i - 1 : i + 2], 2)
+        if c2 < 0 and w[i - 1] <= -c1 / (2 * c2) <= w[i + 1]:
+            wv = -c1 / (2 * c2)
+            return float(c0 + c1 * wv + c2 * wv * wv), float(wv)
+    return float(P[i]), float(w[i])
+
+
 def hinged_roof(
     thickness: float = 12.7, n: int = 8, element: str | None = None, *,
     initial_load_step: float = 0.05, w_end: float = 30.0, max_steps: int = 300,
@@ -419,13 +431,13 @@ def hinged_roof(
     )  # fmt: skip
     P = np.array([0.0] + [p.load_factor * P_ref for p in history])
     w = np.array([0.0] + [p.value for p in history])
-    i = next((k for k in range(1, len(P) - 1) if P[k + 1] < P[k]), int(np.argmax(P)))
+    P_max, w_max = first_limit_point(P, w)
     P_lim, w_lim = HINGED_ROOF_LIMIT.get(thickness, (math.nan, math.nan))
     solver.timings.steps = len(history)
     solver.timings.newton_iterations = path.stats.newton_iterations
     return _result(
-        f"sze-3.6-hinged-roof-{thickness:g}", model, solver, P[i], P_lim, t0,
-        thickness=thickness, w_limit=w[i], w_limit_reference=w_lim,
+        f"sze-3.6-hinged-roof-{thickness:g}", model, solver, P_max, P_lim, t0,
+        thickness=thickness, w_limit=w_max, w_limit_reference=w_lim,
         increments=len(history), cuts=path.stats.cuts, factorisations=path.stats.factorisations,
         P=P.tolist(), w=w.tolist(),
     )  # fmt: skip
