@@ -108,11 +108,12 @@ class _TangentLoad:
         self.form = None if form is None else dolfinx.fem.form(form, jit_options=jit)
         loads = getattr(solver.model, "loads", None)
         self.constant = form is None or (loads is not None and not loads["follower"])
-        self._assembled = False
+        self._cache: PETSc.Vec | None = None
 
     def assemble(self, x: PETSc.Vec, f: PETSc.Vec) -> None:
         """f ← f(q) at the state ``x`` (copied into the model's unknown first)."""
-        if self.constant and self._assembled:
+        if self._cache is not None:  # constant loads: assembled once
+            self._cache.copy(f)
             return
         from dolfinx.fem.petsc import assemble_vector, set_bc
 
@@ -127,7 +128,8 @@ class _TangentLoad:
             f.axpy(1.0, self.solver.f_point)
         set_bc(f, self.solver.bcs, alpha=0.0)  # boundary values do not move with λ
         dolfinx.la.petsc._ghost_update(f, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
-        self._assembled = True
+        if self.constant:
+            self._cache = f.copy()
 
 
 # -- probes --------------------------------------------------------------------------------------
@@ -443,6 +445,14 @@ class ArcLength(_PathFollower):
         tDq = self._wdot(t, self.Dq)
         return max(roots, key=lambda r: aDq + r * tDq + self.psi2 * (Dlam + r) * Dlam)
 
+    def arc_for_load_step(self, load_step: float) -> float:
+        """The arc length Δs of a tangent step Δλ = ``load_step`` from the current state."""
+        self._sync_in()
+        self.lam = float(self.model.load_factor.value)
+        if not self._factorise_and_tangent():
+            raise SolveFailed(self.lam, 0, 0, "the tangent stiffness is singular or not finite")
+        return abs(load_step) * math.sqrt(self._wdot(self.dq_t, self.dq_t) + self.psi2)
+
     def run(
         self,
         initial_load_step: float,
@@ -457,12 +467,7 @@ class ArcLength(_PathFollower):
         ``stop(point)`` is true or when λ ≥ ``lambda_max``. The arc length of the first increment
         is that of a tangent step Δλ₀ = ``initial_load_step``; later ones adapt within
         [``min_step_ratio``, ``max_step_ratio``] × that."""
-        self._sync_in()
-        self.model.load_factor.value = float(self.model.load_factor.value)
-        if not self._factorise_and_tangent():
-            raise SolveFailed(float(self.model.load_factor.value), 0, 0, "singular tangent")
-        ds = abs(initial_load_step) * math.sqrt(self._wdot(self.dq_t, self.dq_t) + self.psi2)
-        self.ds0 = ds
+        ds = self.ds0 = self.arc_for_load_step(initial_load_step)
         return self._run(
             ds, max_steps=max_steps, min_step=min_step_ratio * ds, max_step=max_step_ratio * ds,
             stop=stop, lambda_max=lambda_max,

@@ -392,21 +392,28 @@ def first_limit_point(P: np.ndarray, w: np.ndarray) -> tuple[float, float]:
 
 def hinged_roof(
     thickness: float = 12.7, n: int = 8, element: str | None = None, *,
-    initial_load_step: float = 0.05, w_end: float = 30.0, max_steps: int = 300,
-    max_step_ratio: float = 2.0, comm=MPI.COMM_WORLD,
+    method: str = "arc-length", initial_load_step: float = 0.02, w_end: float = 30.0,
+    max_steps: int = 400, max_step_ratio: float = 2.0, comm=MPI.COMM_WORLD,
 ) -> CaseResult:  # fmt: skip
     """Sze et al. 2004, §3.6: hinged cylindrical roof under a central point load; quarter model.
 
     R = 2540 mm, straight edges 508 mm long, 2θ = 0.2 rad, E = 3102.75 N/mm², ν = 0.3,
     thickness 12.7 (snap-through) or 6.35 mm (snap-through and snap-back at the centre); the
-    straight edges hinged (u = 0, rotations free), the curved ones free. The path is followed by
-    arc length (:class:`~fenics_garment.path.ArcLength`, cylindrical, displacement-weighted) from
-    the unloaded state until the central deflection w_C = −u_z reaches ``w_end``.
+    straight edges hinged (u = 0, rotations free), the curved ones free; symmetry planes x = 0
+    and y = 0. The path is followed from the unloaded state until the central deflection
+    w_C = −u_z reaches ``w_end``, with ``method``:
 
-    The value returned is the first limit load P_lim (N, full roof: 4× the quarter's) against
-    :data:`HINGED_ROOF_LIMIT`; ``extra`` has w_C there, and the whole curve (P, w_C).
+    * ``"arc-length"``: :class:`~fenics_garment.path.ArcLength` (cylindrical, on the
+      displacements), first arc that of a tangent step ``initial_load_step`` × 3000 N, later
+      ones adapted up to ``max_step_ratio`` × the first;
+    * ``"newtonal"``: PETSc's SNESNEWTONAL (:func:`~fenics_garment.path.newtonal_path`) with
+      that first arc length throughout, until λ = 1 (3000 N).
+
+    The value returned is the first limit load P_lim (N, full roof: 4× the quarter's, refined by
+    :func:`first_limit_point`) against :data:`HINGED_ROOF_LIMIT`; ``extra`` has w_C there and
+    the whole curve (P, w_C).
     """
-    from fenics_garment.path import ArcLength, DofProbe
+    from fenics_garment.path import ArcLength, DofProbe, newtonal_path
 
     t0 = time.perf_counter()
     R, half_length, theta = 2540.0, 254.0, 0.1
@@ -425,21 +432,32 @@ def hinged_roof(
     solver = NonlinearSolver(model, bcs, point_loads=[PointLoad(top, (0.0, 0.0, -P_ref / 4))])
     uz = DofProbe.at_point(model, top, component=2)
     path = ArcLength(solver, monitor=lambda: -uz())
-    history = path.run(
-        initial_load_step, max_steps=max_steps, max_step_ratio=max_step_ratio,
-        stop=lambda p: p.value >= w_end,
-    )  # fmt: skip
+    if method == "arc-length":
+        history = path.run(
+            initial_load_step, max_steps=max_steps, max_step_ratio=max_step_ratio,
+            stop=lambda p: p.value >= w_end,
+        )  # fmt: skip
+        stats = path.stats
+        extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
+        its = stats.newton_iterations
+    elif method == "newtonal":
+        ds = path.arc_for_load_step(initial_load_step)
+        res = newtonal_path(solver, ds, max_steps=max_steps, monitor=lambda: -uz())
+        history = res.history
+        extra = {"cuts": 0, "reason": res.reason, "arc_length": ds}
+        its = res.iterations
+    else:
+        raise ValueError(f"method must be 'arc-length' or 'newtonal', got {method!r}")
     P = np.array([0.0] + [p.load_factor * P_ref for p in history])
     w = np.array([0.0] + [p.value for p in history])
     P_max, w_max = first_limit_point(P, w)
     P_lim, w_lim = HINGED_ROOF_LIMIT.get(thickness, (math.nan, math.nan))
     solver.timings.steps = len(history)
-    solver.timings.newton_iterations = path.stats.newton_iterations
+    solver.timings.newton_iterations = its
     return _result(
         f"sze-3.6-hinged-roof-{thickness:g}", model, solver, P_max, P_lim, t0,
-        thickness=thickness, w_limit=w_max, w_limit_reference=w_lim,
-        increments=len(history), cuts=path.stats.cuts, factorisations=path.stats.factorisations,
-        P=P.tolist(), w=w.tolist(),
+        thickness=thickness, method=method, w_limit=w_max, w_limit_reference=w_lim,
+        increments=len(history), P=P.tolist(), w=w.tolist(), **extra,
     )  # fmt: skip
 
 
