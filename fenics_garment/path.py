@@ -66,34 +66,20 @@ class PathPoint:
 def tangent_load_form(model) -> ufl.Form | None:
     """The form of f(q) = −∂F/∂λ, the load direction, or None when the model has no form loads.
 
-    A :class:`~fenics_garment.shell.model.ShellModel`'s residual is
-    F = δΠ − λ δW_dead + λ R_follower (+ point loads, which the solver adds), so
-    f = δW_dead − R_follower. A model with a ``tangent_load()`` method gives it itself; any
-    other model is differentiated by difference, f = F(q, 0) − F(q, 1), exact for F affine in λ.
+    A model with a ``tangent_load()`` method gives it itself (a
+    :class:`~fenics_garment.shell.model.ShellModel`: dead work, follower pressures and point
+    loads; the solver's :class:`~fenics_garment.shell.loads.PointLoad` vector is added by the
+    caller). Any other model is differentiated by difference, f = F(q, 0) − F(q, 1), exact for F
+    affine in λ (it assembles the internal forces twice).
     """
     if hasattr(model, "tangent_load"):
         return model.tangent_load()
-    loads = getattr(model, "loads", None)
-    if loads is None:
-        F = model.residual()
-        lam = model.load_factor
-        zero = dolfinx.fem.Constant(lam.ufl_domain(), dolfinx.default_scalar_type(0.0))
-        one = dolfinx.fem.Constant(lam.ufl_domain(), dolfinx.default_scalar_type(1.0))
-        return ufl.replace(F, {lam: zero}) - ufl.replace(F, {lam: one})
-    from fenics_garment.shell import energy as terms
-
-    v = ufl.TestFunction(model.Q)
-    f = None
-    dead = [w * m for w, m in loads["dead"]]
-    if dead:
-        f = ufl.derivative(sum(dead[1:], dead[0]), model.q, v)
-    if loads["follower"]:
-        kin = model.kinematics()
-        v_u = ufl.split(v)[0]
-        for p in loads["follower"]:
-            term = -terms.pressure_residual(kin, p, v_u) * model.dx_full
-            f = term if f is None else f + term
-    return f
+    F = model.residual()
+    lam = model.load_factor
+    mesh = lam.ufl_domain()
+    zero = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
+    one = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
+    return ufl.replace(F, {lam: zero}) - ufl.replace(F, {lam: one})
 
 
 class _TangentLoad:
@@ -107,7 +93,10 @@ class _TangentLoad:
         jit = JIT_OPTIONS if jit_options is None else jit_options
         self.form = None if form is None else dolfinx.fem.form(form, jit_options=jit)
         loads = getattr(solver.model, "loads", None)
-        self.constant = form is None or (loads is not None and not loads["follower"])
+        follows = (
+            loads is None or bool(loads["follower"]) or any(f for _, _, f in loads.get("point", ()))
+        )
+        self.constant = form is None or not follows
         self._cache: PETSc.Vec | None = None
 
     def assemble(self, x: PETSc.Vec, f: PETSc.Vec) -> None:
@@ -458,7 +447,7 @@ class ArcLength(_PathFollower):
         initial_load_step: float,
         *,
         max_steps: int = 200,
-        max_step_ratio: float = 8.0,
+        max_step_ratio: float = 4.0,
         min_step_ratio: float = 1e-4,
         stop: Callable[[PathPoint], bool] | None = None,
         lambda_max: float | None = None,
