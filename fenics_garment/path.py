@@ -191,6 +191,8 @@ def displacement_weights(model) -> PETSc.Vec:
 # -- the bordering loop ----------------------------------------------------------------------------
 @dataclass
 class _Stats:
+    """Work of a path follower, accumulated over its runs."""
+
     increments: int = 0
     cuts: int = 0
     newton_iterations: int = 0
@@ -339,9 +341,9 @@ class _PathFollower:
         self._sync_in()
         self.lam = float(self.model.load_factor.value)
         tol = self._tolerance()
-        cuts = 0
+        cuts = done = 0
         try:
-            while len(self.history) < max_steps:
+            while done < max_steps:
                 its = self._increment(step, tol)
                 if its is None:
                     cuts += 1
@@ -358,6 +360,7 @@ class _PathFollower:
                 point = PathPoint(self.lam, self._value(), its, self._step, cuts)
                 self.history.append(point)
                 self.stats.increments += 1
+                done += 1
                 if self.on_step:
                     self.on_step(point)
                 cuts = 0
