@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -406,6 +406,9 @@ def hinged_roof(
     * ``"arc-length"``: :class:`~fenics_garment.path.ArcLength` (cylindrical, on the
       displacements), first arc that of a tangent step ``initial_load_step`` × 3000 N, later
       ones adapted up to ``max_step_ratio`` × the first;
+    * ``"displacement"``: :class:`~fenics_garment.path.DisplacementControl` of w_C in steps
+      from 25 ``initial_load_step`` mm (0.5 mm by default) — through the snap-through of the
+      12.7 mm roof; the 6.35 mm roof's w_C turns back, which it cannot follow;
     * ``"newtonal"``: PETSc's SNESNEWTONAL (:func:`~fenics_garment.path.newtonal_path`) with
       that first arc length throughout, until λ = 1 (3000 N).
 
@@ -413,7 +416,7 @@ def hinged_roof(
     :func:`first_limit_point`) against :data:`HINGED_ROOF_LIMIT`; ``extra`` has w_C there and
     the whole curve (P, w_C).
     """
-    from fenics_garment.path import ArcLength, DofProbe, newtonal_path
+    from fenics_garment.path import ArcLength, DisplacementControl, DofProbe, newtonal_path
 
     t0 = time.perf_counter()
     R, half_length, theta = 2540.0, 254.0, 0.1
@@ -440,6 +443,14 @@ def hinged_roof(
         stats = path.stats
         extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
         its = stats.newton_iterations
+    elif method == "displacement":
+        control = DisplacementControl(solver, uz)
+        dw = initial_load_step * 25.0
+        history = control.run(-dw, -w_end, max_steps=max_steps, max_increment=max_step_ratio * dw)
+        history = [replace(p, value=-p.value) for p in history]
+        stats = control.stats
+        extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
+        its = stats.newton_iterations
     elif method == "newtonal":
         ds = path.arc_for_load_step(initial_load_step)
         res = newtonal_path(solver, ds, max_steps=max_steps, monitor=lambda: -uz())
@@ -447,7 +458,9 @@ def hinged_roof(
         extra = {"cuts": 0, "reason": res.reason, "arc_length": ds}
         its = res.iterations
     else:
-        raise ValueError(f"method must be 'arc-length' or 'newtonal', got {method!r}")
+        raise ValueError(
+            f"method must be 'arc-length', 'displacement' or 'newtonal', got {method!r}"
+        )
     P = np.array([0.0] + [p.load_factor * P_ref for p in history])
     w = np.array([0.0] + [p.value for p in history])
     P_max, w_max = first_limit_point(P, w)
