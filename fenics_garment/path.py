@@ -472,7 +472,9 @@ class DisplacementControl(_PathFollower):
     ``run(increment, target)`` moves w from its current value to ``target`` in steps that start
     at ``increment`` and adapt to the Newton iterations like the arc length, landing on the
     target. λ may rise and fall (snap-through), but a snap-back of the controlled dof itself
-    cannot be passed (use :class:`ArcLength`).
+    cannot be followed, and it is not detected either: beyond the turn Newton lands on another
+    branch at the same w (the 6.35 mm hinged roof: λ P_ref jumps from +382 N to −376 N between
+    w_C = 16.2 and 17.2 mm, where the path turns back at 17.0 mm). Use :class:`ArcLength` there.
     """
 
     def __init__(self, solver: NonlinearSolver, probe: DofProbe, **kw):

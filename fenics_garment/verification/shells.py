@@ -408,7 +408,7 @@ def hinged_roof(
       ones adapted up to ``max_step_ratio`` × the first;
     * ``"displacement"``: :class:`~fenics_garment.path.DisplacementControl` of w_C in steps
       from 25 ``initial_load_step`` mm (0.5 mm by default) — through the snap-through of the
-      12.7 mm roof; the 6.35 mm roof's w_C turns back, which it cannot follow;
+      12.7 mm roof; the 6.35 mm roof's w_C turns back, which it jumps (to another branch);
     * ``"newtonal"``: PETSc's SNESNEWTONAL (:func:`~fenics_garment.path.newtonal_path`) with
       that first arc length throughout, until λ = 1 (3000 N).
 
