@@ -393,7 +393,8 @@ def first_limit_point(P: np.ndarray, w: np.ndarray) -> tuple[float, float]:
 def hinged_roof(
     thickness: float = 12.7, n: int = 8, element: str | None = None, *,
     method: str = "arc-length", initial_load_step: float = 0.02, w_end: float = 30.0,
-    max_steps: int = 400, max_step_ratio: float = 2.0, comm=MPI.COMM_WORLD,
+    max_steps: int = 400, max_step_ratio: float = 2.0, kirchhoff: bool = False,
+    comm=MPI.COMM_WORLD,
 ) -> CaseResult:  # fmt: skip
     """Sze et al. 2004, §3.6: hinged cylindrical roof under a central point load; quarter model.
 
@@ -427,6 +428,8 @@ def hinged_roof(
     )  # fmt: skip
     material = Isotropic(E=3102.75, nu=0.3, thickness=thickness)
     model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
+    if kirchhoff:  # the thin-shell limit (shear ×100), for comparison
+        kirchhoff_limit(model)
     hinged = lambda x: np.isclose(x[0], R * math.sin(theta))  # noqa: E731
     bcs = (B.fix_components(model, hinged, u=(0, 1, 2))
            + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0)
