@@ -550,7 +550,8 @@ def newtonal_path(
     monitor: Callable[[], float] | None = None,
     prefix: str = "garment_newtonal_",
 ) -> NewtonALResult:
-    """The whole path from λ = 0 to ``lambda_max`` with PETSc's ``SNESNEWTONAL``.
+    """The whole path from λ = 0 and q = 0 (``model.q`` is reset) to ``lambda_max`` with PETSc's
+    ``SNESNEWTONAL``.
 
     Fixed arc length ``step_size`` (every dof weighted alike, plus ``psisq`` Δλ²), the
     residual and Jacobian of ``solver`` (its callbacks, with λ read from the SNES), the tangent
