@@ -13,7 +13,7 @@ the *constraint* g(q, λ) = 0, that picks the next point of the curve:
   marched in.
 * **displacement control**: one degree of freedom is prescribed, e·q = w (e.g. the deflection
   of the load point), and λ is the load that holds it there. It passes limit points in λ but not
-  in w (a snap-back of the controlled dof).
+  in w: a snap-back of the controlled dof is jumped (to another branch at the same w).
 
 Both are solved by the *bordering* method: each Newton iteration factorises K once and solves it
 twice, K δq_R = −F (the load-controlled Newton correction) and K δq_T = f (the tangent
@@ -387,7 +387,12 @@ class ArcLength(_PathFollower):
     """
 
     def __init__(
-        self, solver: NonlinearSolver, *, weights: str | PETSc.Vec | None = None, psi=0.0, **kw
+        self,
+        solver: NonlinearSolver,
+        *,
+        weights: str | PETSc.Vec | None = None,
+        psi: float = 0.0,
+        **kw,
     ):
         super().__init__(solver, **kw)
         if weights is None:  # a shell (u, θ): the displacements; anything else: every dof
