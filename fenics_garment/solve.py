@@ -143,12 +143,14 @@ class Timings:
 def is_symmetric(model) -> bool:
     """True when the model's residual is the derivative of an energy (symmetric Jacobian).
 
-    A :class:`~fenics_garment.shell.model.ShellModel` without follower loads and without extra
-    residual terms (contact) qualifies; anything else (unknown models included) does not.
+    A :class:`~fenics_garment.shell.model.ShellModel` without follower loads (pressures, follower
+    point loads) and without extra residual terms (contact) qualifies; anything else (unknown
+    models included) does not.
     """
     follower = getattr(model, "_follower", None)
     extra = getattr(model, "_extra_residual", None)
-    return follower == [] and extra == []
+    points = getattr(model, "_point", [])
+    return follower == [] and extra == [] and not any(f for _, _, f in points)
 
 
 class NonlinearSolver:

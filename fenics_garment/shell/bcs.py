@@ -11,7 +11,7 @@ from collections.abc import Callable, Iterable
 
 import numpy as np
 
-from fenics_garment._stack import dolfinx
+from fenics_garment._stack import MPI, dolfinx, ufl
 
 Marker = Callable[[np.ndarray], np.ndarray]
 
@@ -84,3 +84,45 @@ def fix_point_dofs(
             zero = dolfinx.fem.Function(Vc)
             bcs.append(dolfinx.fem.dirichletbc(zero, dofs, sub))
     return bcs
+
+
+def symmetry_plane_penalty(
+    model, point, normal, *, penalty: float = 1e4, tol: float = 1e-8
+) -> dolfinx.fem.Constant:
+    """Mirror symmetry about the plane through ``point`` with normal ``normal`` (any direction),
+    by a penalty energy on the boundary edges that lie in the plane; returns the penalty factor
+    as a Constant (change it without recompiling).
+
+    :func:`symmetry_plane` fixes Cartesian components and so needs an axis-aligned plane. Here the
+    same conditions, u·n = 0 and θ ∥ n (the rotation vector normal to the plane, i.e.
+    θ − (θ·n)n = 0), are added to the internal energy as
+
+        Π_pen = ½ ∫ κ_u (u·n)² + κ_θ |θ − (θ·n) n|² ds   over the edges in the plane,
+
+    with κ_u = ``penalty`` · A₁₁/h and κ_θ = ``penalty`` · (D₁₁/h + S h) (membrane, bending and
+    shear stiffness over the cell size h), so the constraint is met to ≈ 1/``penalty`` of the
+    displacement there whatever the material. Symmetric Jacobian. The edges are picked by the
+    quadrature points' distance to the plane (< ``tol`` × the mesh's extent), not by a mesh
+    tag, so the term goes with any other boundary measures of the model.
+    """
+    mesh = model.geometry.mesh
+    n = np.asarray(normal, dtype=np.float64)
+    n = n / np.linalg.norm(n)
+    p = np.asarray(point, dtype=np.float64)
+    x = mesh.geometry.x
+    extent = mesh.comm.allreduce(float(np.ptp(x, axis=0).max()) if len(x) else 0.0, op=MPI.MAX)
+    nv = ufl.as_vector(n.tolist())
+    X = ufl.SpatialCoordinate(mesh)
+    on_plane = ufl.conditional(ufl.lt(abs(ufl.dot(X - ufl.as_vector(p.tolist()), nv)),
+                                      tol * extent), 1.0, 0.0)  # fmt: skip
+    st = model.stiffness
+    h = model.h_cell
+    factor = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(penalty))
+    k_u = factor * st.A11 / h
+    k_t = factor * (st.D11 / h + max(st.S1, st.S2) * h)
+    u, theta = model.u, model.theta
+    un = ufl.dot(u, nv)
+    t_in = theta - ufl.dot(theta, nv) * nv
+    psi = 0.5 * on_plane * (k_u * un**2 + k_t * ufl.dot(t_in, t_in))
+    model.add_energy(psi, ufl.Measure("ds", domain=mesh, metadata={"quadrature_degree": 4}))
+    return factor

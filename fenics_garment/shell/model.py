@@ -29,7 +29,12 @@ import numpy as np
 from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.materials import Fabric, Isotropic
 from fenics_garment.shell import energy as terms
-from fenics_garment.shell.kinematics import ShellGeometry, ShellKinematics, shell_kinematics
+from fenics_garment.shell.kinematics import (
+    ShellGeometry,
+    ShellKinematics,
+    rotate,
+    shell_kinematics,
+)
 
 
 @dataclass(frozen=True)
@@ -150,6 +155,7 @@ class ShellModel:
     _follower: list = field(default_factory=list, repr=False)
     _extra_residual: list = field(default_factory=list, repr=False)
     _energy: list = field(default_factory=list, repr=False)
+    _point: list = field(default_factory=list, repr=False)  # (vertex point, force, follower)
     discretisation: Discretisation | None = field(default=None, repr=False, compare=False)
 
     def __post_init__(self) -> None:
@@ -161,6 +167,7 @@ class ShellModel:
         # a replace() copy must not add to the lists of the model it was copied from
         self._work, self._follower = list(self._work), list(self._follower)
         self._extra_residual, self._energy = list(self._extra_residual), list(self._energy)
+        self._point = list(self._point)
         self.Q, self.q = d.Q, d.q
         self.load_factor, self.extra_switch = d.load_factor, d.extra_switch
         self.h_cell, self.dx_full, self.dx_reduced = d.h_cell, d.dx_full, d.dx_reduced
@@ -219,8 +226,10 @@ class ShellModel:
 
     @property
     def loads(self) -> dict[str, tuple]:
-        """The dead loads ((work density, measure) pairs) and follower pressures."""
-        return {"dead": tuple(self._work), "follower": tuple(self._follower)}
+        """The dead loads ((work density, measure) pairs), follower pressures and point loads
+        ((vertex, force Constant, follower) triples of :meth:`add_point_load`)."""
+        return {"dead": tuple(self._work), "follower": tuple(self._follower),
+                "point": tuple(self._point)}  # fmt: skip
 
     def membrane_forces(self) -> ufl.core.expr.Expr:
         """N = ∂ψ_m/∂ε [N/m] of the membrane law in use (2×2, warp/weft frame)."""
@@ -270,6 +279,56 @@ class ShellModel:
         self._follower.append(c)
         return c
 
+    def add_point_load(self, point, force, *, follower: bool = False) -> dolfinx.fem.Constant:
+        """A point force (N) at a mesh vertex, scaled by λ; returns its Constant.
+
+        Integrated with DOLFINx's vertex measure ``dP``, so it is a term of the model's forms
+        (residual, Jacobian, tangent load) like the distributed loads. ``follower=False``: a dead
+        force of fixed direction, the work λ f·u(x₀). ``follower=True``: the force turns with
+        the shell's rotation at the point, λ R(θ(x₀)) f (a transverse force stays transverse);
+        not conservative, its Jacobian is not symmetric. The point must be a vertex of the mesh
+        (within 1e-8); for any other point of the surface pass a
+        :class:`~fenics_garment.shell.loads.PointLoad` to the solver instead (dead only).
+        """
+        mesh = self.geometry.mesh
+        p = np.asarray(point, dtype=np.float64)
+        n_owned = mesh.topology.index_map(0).size_local
+        verts = dolfinx.mesh.locate_entities(
+            mesh, 0, lambda x: np.linalg.norm(x.T - p[None, :], axis=1) < 1e-8
+        )
+        owned = verts[verts < n_owned]
+        if mesh.comm.allreduce(len(owned)) != 1:
+            raise ValueError(
+                f"point load at {tuple(p)}: not a vertex of the mesh; pass a PointLoad to the "
+                "solver (point_loads=...) for a dead force anywhere on the surface"
+            )
+        c = self.constant(force)
+        self._point.append((owned.astype(np.int32), c, bool(follower)))
+        return c
+
+    def _point_measure(self) -> ufl.Measure:
+        """The vertex measure of the point loads, load i tagged i + 1 (one meshtags for all:
+        a form takes one subdomain data per integral type). Owned vertices only, so that each
+        point is counted once in parallel."""
+        verts = np.concatenate([v for v, _, _ in self._point]).astype(np.int32)
+        values = np.concatenate(
+            [np.full(len(v), i + 1, dtype=np.int32) for i, (v, _, _) in enumerate(self._point)]
+        )
+        order = np.argsort(verts)
+        tags = dolfinx.mesh.meshtags(self.geometry.mesh, 0, verts[order], values[order])
+        return ufl.Measure("dP", domain=self.geometry.mesh, subdomain_data=tags)
+
+    def _point_forces(self, v_u) -> ufl.core.expr.Expr | None:
+        """Σ f_i·v(x_i), the follower ones rotated by R(θ(x_i)): the point loads at λ = 1."""
+        if not self._point:
+            return None
+        dP = self._point_measure()
+        terms_ = []
+        for i, (_, c, follower) in enumerate(self._point):
+            f = rotate(self.theta, c) if follower else c
+            terms_.append(ufl.dot(f, v_u) * dP(i + 1))
+        return sum(terms_[1:], terms_[0])
+
     def add_residual(self, form: ufl.Form | Callable[[], ufl.Form]) -> None:
         """Add a residual form (e.g. contact), linear in the test function of ``self.Q``, or a
         builder ``() -> form`` called when :meth:`residual` is (so that it uses the laws in use
@@ -307,9 +366,32 @@ class ShellModel:
             v_u = ufl.split(v)[0]
             for p in self._follower:
                 F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
+        points = self._point_forces(ufl.split(v)[0])
+        if points is not None:
+            F -= self.load_factor * points
         for extra in self._extra_residual:
             F += self.extra_switch * (extra if isinstance(extra, ufl.Form) else extra())
         return F
+
+    def tangent_load(self) -> ufl.Form | None:
+        """f = −∂F/∂λ at the current state (the load direction of path following): the dead
+        work δW, minus the follower-pressure residual, plus the point forces; None without
+        loads. The residual is affine in λ, so f does not depend on λ."""
+        v = ufl.TestFunction(self.Q)
+        v_u = ufl.split(v)[0]
+        f = None
+        if self._work:
+            dead = [w * m for w, m in self._work]
+            f = ufl.derivative(sum(dead[1:], dead[0]), self.q, v)
+        if self._follower:
+            kin = self.kinematics()
+            for p in self._follower:
+                term = -terms.pressure_residual(kin, p, v_u) * self.dx_full
+                f = term if f is None else f + term
+        points = self._point_forces(v_u)
+        if points is not None:
+            f = points if f is None else f + points
+        return f
 
     def jacobian(self, F: ufl.Form) -> ufl.Form:
         return ufl.derivative(F, self.q, ufl.TrialFunction(self.Q))

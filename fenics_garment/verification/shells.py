@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 
@@ -372,6 +372,111 @@ def pinched_semicylinder(
     return _result("sze-3.7-semicylinder", model, solver, -w, 1.71505, t0)
 
 
+#: Sze et al. 2004, §3.6, Tables 9a–f: the first maximum of the load along the path of the
+#: isotropic hinged roof, as P/P_max with P_max = 3000 N, and −W_C (mm) at it; transcribed as
+#: ``SZE_2004`` in saullocastro/panels, notebooks/follower_utils.py (commit 1ea6ab35).
+HINGED_ROOF_LIMIT = {12.7: (0.7421 * 3000.0, 11.293), 6.35: (0.1953 * 3000.0, 12.892)}
+
+
+def first_limit_point(P: np.ndarray, w: np.ndarray) -> tuple[float, float]:
+    """The first local maximum of the load P along a traced path (P, w), refined by the vertex
+    of the parabola P(w) through the largest sampled value and its two neighbours."""
+    i = next((k for k in range(1, len(P) - 1) if P[k + 1] < P[k]), int(np.argmax(P)))
+    if 0 < i < len(P) - 1:
+        c2, c1, c0 = np.polyfit(w[i - 1 : i + 2], P[i - 1 : i + 2], 2)
+        if c2 < 0 and w[i - 1] <= -c1 / (2 * c2) <= w[i + 1]:
+            wv = -c1 / (2 * c2)
+            return float(c0 + c1 * wv + c2 * wv * wv), float(wv)
+    return float(P[i]), float(w[i])
+
+
+def hinged_roof(
+    thickness: float = 12.7, n: int = 8, element: str | None = None, *,
+    method: str = "arc-length", initial_load_step: float = 0.02, w_end: float = 30.0,
+    max_steps: int = 400, max_step_ratio: float = 2.0, kirchhoff: bool = False,
+    comm=MPI.COMM_WORLD,
+) -> CaseResult:  # fmt: skip
+    """Sze et al. 2004, §3.6: hinged cylindrical roof under a central point load; quarter model.
+
+    R = 2540 mm, straight edges 508 mm long, 2θ = 0.2 rad, E = 3102.75 N/mm², ν = 0.3,
+    thickness 12.7 (snap-through) or 6.35 mm (snap-through and snap-back at the centre); the
+    straight edges hinged (u = 0, rotations free), the curved ones free; symmetry planes x = 0
+    and y = 0. The path is followed from the unloaded state until the central deflection
+    w_C = −u_z reaches ``w_end``, with ``method``:
+
+    * ``"arc-length"``: :class:`~fenics_garment.path.ArcLength` (cylindrical, on the
+      displacements), first arc that of a tangent step ``initial_load_step`` × 3000 N, later
+      ones adapted up to ``max_step_ratio`` × the first;
+    * ``"displacement"``: :class:`~fenics_garment.path.DisplacementControl` of w_C in steps
+      from 25 ``initial_load_step`` mm (0.5 mm by default) — through the snap-through of the
+      12.7 mm roof; the 6.35 mm roof's w_C turns back, which it jumps (to another branch);
+    * ``"newtonal"``: PETSc's SNESNEWTONAL (:func:`~fenics_garment.path.newtonal_path`) with
+      that first arc length throughout, until λ = 1 (3000 N).
+
+    The value returned is the first limit load P_lim (N, full roof: 4× the quarter's, refined by
+    :func:`first_limit_point`) against :data:`HINGED_ROOF_LIMIT`; ``extra`` has w_C there and
+    the whole curve (P, w_C).
+    """
+    from fenics_garment.path import ArcLength, DisplacementControl, DofProbe, newtonal_path
+
+    t0 = time.perf_counter()
+    R, half_length, theta = 2540.0, 254.0, 0.1
+    P_ref = 3000.0  # the full roof's; the quarter carries P_ref/4
+    mesh = parametric_surface_mesh(
+        comm, lambda a, y: np.array([R * np.sin(a), y, R * np.cos(a)]),
+        (0.0, theta), (0.0, half_length), (n, n),
+    )  # fmt: skip
+    material = Isotropic(E=3102.75, nu=0.3, thickness=thickness)
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
+    if kirchhoff:  # the thin-shell limit (shear ×100), for comparison
+        kirchhoff_limit(model)
+    hinged = lambda x: np.isclose(x[0], R * math.sin(theta))  # noqa: E731
+    bcs = (B.fix_components(model, hinged, u=(0, 1, 2))
+           + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0)
+           + B.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0), axis=1))  # fmt: skip
+    top = (0.0, 0.0, R)
+    solver = NonlinearSolver(model, bcs, point_loads=[PointLoad(top, (0.0, 0.0, -P_ref / 4))])
+    uz = DofProbe.at_point(model, top, component=2)
+    path = ArcLength(solver, monitor=lambda: -uz())
+    if method == "arc-length":
+        history = path.run(
+            initial_load_step, max_steps=max_steps, max_step_ratio=max_step_ratio,
+            stop=lambda p: p.value >= w_end,
+        )  # fmt: skip
+        stats = path.stats
+        extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
+        its = stats.newton_iterations
+    elif method == "displacement":
+        control = DisplacementControl(solver, uz)
+        dw = initial_load_step * 25.0
+        history = control.run(-dw, -w_end, max_steps=max_steps, max_increment=max_step_ratio * dw)
+        history = [replace(p, value=-p.value) for p in history]
+        stats = control.stats
+        extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
+        its = stats.newton_iterations
+    elif method == "newtonal":
+        ds = path.arc_for_load_step(initial_load_step)
+        res = newtonal_path(solver, ds, max_steps=max_steps, monitor=lambda: -uz())
+        history = res.history
+        extra = {"cuts": 0, "reason": res.reason, "arc_length": ds}
+        its = res.iterations
+    else:
+        raise ValueError(
+            f"method must be 'arc-length', 'displacement' or 'newtonal', got {method!r}"
+        )
+    P = np.array([0.0] + [p.load_factor * P_ref for p in history])
+    w = np.array([0.0] + [p.value for p in history])
+    P_max, w_max = first_limit_point(P, w)
+    P_lim, w_lim = HINGED_ROOF_LIMIT.get(thickness, (math.nan, math.nan))
+    solver.timings.steps = len(history)
+    solver.timings.newton_iterations = its
+    return _result(
+        f"sze-3.6-hinged-roof-{thickness:g}", model, solver, P_max, P_lim, t0,
+        thickness=thickness, method=method, w_limit=w_max, w_limit_reference=w_lim,
+        increments=len(history), P=P.tolist(), w=w.tolist(), **extra,
+    )  # fmt: skip
+
+
 CASES: dict[str, Callable[..., CaseResult]] = {
     "scordelis-lo": scordelis_lo,
     "pinched-cylinder": pinched_cylinder,
@@ -381,5 +486,7 @@ CASES: dict[str, Callable[..., CaseResult]] = {
     "sze-3.1-cantilever-shear": cantilever_end_shear,
     "sze-3.2-rollup": cantilever_rollup,
     "sze-3.3-slit-annulus": slit_annular_plate,
+    "sze-3.6-hinged-roof-12.7": lambda n=8, **kw: hinged_roof(12.7, n, **kw),
+    "sze-3.6-hinged-roof-6.35": lambda n=8, **kw: hinged_roof(6.35, n, **kw),
     "sze-3.7-semicylinder": pinched_semicylinder,
 }

@@ -1,0 +1,645 @@
+"""Path following through limit points: arc-length continuation and displacement control.
+
+Load control (:class:`~fenics_garment.solve.LoadStepper`) raises the load factor λ and solves
+F(q, λ) = 0 for q. It fails at a *limit point*, where the tangent stiffness K = ∂F/∂q is singular
+and the load–deflection curve turns back (snap-through): beyond it there is no equilibrium near
+the current one at a higher λ. Path following makes λ an unknown and adds one scalar equation,
+the *constraint* g(q, λ) = 0, that picks the next point of the curve:
+
+* **arc length** (Riks, Crisfield): the increment from the last converged point (q_n, λ_n) has
+  a prescribed length, ‖Δq‖²_W + ψ² Δλ² = Δs². With ψ = 0 (Crisfield's *cylindrical* arc
+  length, the default) only the displacements count. Limit points in λ (snap-through) and in
+  the displacements (snap-back) are passed alike, because neither λ nor any one displacement is
+  marched in.
+* **displacement control**: one degree of freedom is prescribed, e·q = w (e.g. the deflection
+  of the load point), and λ is the load that holds it there. It passes limit points in λ but not
+  in w: a snap-back of the controlled dof is jumped (to another branch at the same w).
+
+Both are solved by the *bordering* method: each Newton iteration factorises K once and solves it
+twice, K δq_R = −F (the load-controlled Newton correction) and K δq_T = f (the tangent
+displacement of the load direction f = −∂F/∂λ), then sets δq = δq_R + δλ δq_T with δλ chosen so
+that the iterate satisfies the constraint: a quadratic equation for the arc length (of its two
+roots, the one whose increment turns least from the previous iterate's is taken), a linear one
+for displacement control. The predictor of an increment is the tangent, Δq = Δλ δq_T; the sign of
+Δλ follows the previous increment (Feng's criterion, Δq_prev·W δq_T > 0), which turns λ back after
+a limit point. Step sizes adapt to the Newton iteration count (Crisfield's (I_d / I)^½ rule) and
+a failed increment is retried from the last converged point at half the step.
+
+The loop is written here, on :class:`~fenics_garment.solve.NonlinearSolver`'s residual, Jacobian
+and linear solver, rather than with PETSc's ``SNESNEWTONAL`` (:func:`newtonal_path`, kept for
+comparison): ``SNESNEWTONAL`` (PETSc 3.25) takes a fixed arc length from λ = 0 in one
+``SNESSolve`` and ends the whole path at the first increment that fails, with no cut-back, no
+restart from an intermediate state and no stop other than λ ≥ λ_max; its constraint weighs every
+dof alike (millimetres of displacement with radians of rotation). Dirichlet conditions and point
+loads fit either (the tangent load is zero on the constrained rows and includes the point
+forces).
+
+The model's loads must scale with ``model.load_factor`` (F affine in λ): dead loads, follower
+pressures and point loads of a :class:`~fenics_garment.shell.model.ShellModel` do.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from fenics_garment._stack import MPI, PETSc, dolfinx, ufl
+from fenics_garment.solve import NonlinearSolver, SolveFailed
+
+
+@dataclass
+class PathPoint:
+    """A converged point of the equilibrium path."""
+
+    load_factor: float
+    value: float  # the monitored quantity (e.g. a deflection); NaN without a monitor
+    iterations: int  # Newton (corrector) iterations of the increment
+    step: float  # arc length Δs (or prescribed-displacement increment) of the increment
+    cuts: int  # step halvings before it converged
+
+
+# -- tangent load f = −∂F/∂λ -------------------------------------------------------------------
+def tangent_load_form(model) -> ufl.Form | None:
+    """The form of f(q) = −∂F/∂λ, the load direction, or None when the model has no form loads.
+
+    A model with a ``tangent_load()`` method gives it itself (a
+    :class:`~fenics_garment.shell.model.ShellModel`: dead work, follower pressures and point
+    loads; the solver's :class:`~fenics_garment.shell.loads.PointLoad` vector is added by the
+    caller). Any other model is differentiated by difference, f = F(q, 0) − F(q, 1), exact for F
+    affine in λ (it assembles the internal forces twice).
+    """
+    if hasattr(model, "tangent_load"):
+        return model.tangent_load()
+    F = model.residual()
+    lam = model.load_factor
+    mesh = lam.ufl_domain()
+    zero = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
+    one = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
+    return ufl.replace(F, {lam: zero}) - ufl.replace(F, {lam: one})
+
+
+class _TangentLoad:
+    """Assembles f(q) (+ the solver's point loads) with zeros on the Dirichlet rows."""
+
+    def __init__(self, solver: NonlinearSolver, jit_options: dict | None = None):
+        from fenics_garment.solve import JIT_OPTIONS
+
+        self.solver = solver
+        form = tangent_load_form(solver.model)
+        jit = JIT_OPTIONS if jit_options is None else jit_options
+        self.form = None if form is None else dolfinx.fem.form(form, jit_options=jit)
+        loads = getattr(solver.model, "loads", None)
+        follows = (
+            loads is None or bool(loads["follower"]) or any(f for _, _, f in loads.get("point", ()))
+        )
+        self.constant = form is None or not follows
+        self._cache: PETSc.Vec | None = None
+
+    def assemble(self, x: PETSc.Vec, f: PETSc.Vec) -> None:
+        """f ← f(q) at the state ``x`` (copied into the model's unknown first)."""
+        if self._cache is not None:  # constant loads: assembled once
+            self._cache.copy(f)
+            return
+        from dolfinx.fem.petsc import assemble_vector, set_bc
+
+        dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        dolfinx.fem.petsc.assign(x, self.solver.model.q)
+        with f.localForm() as fl:
+            fl.set(0.0)
+        if self.form is not None:
+            assemble_vector(f, self.form)
+        dolfinx.la.petsc._ghost_update(f, PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+        if self.solver.f_point is not None:
+            f.axpy(1.0, self.solver.f_point)
+        set_bc(f, self.solver.bcs, alpha=0.0)  # boundary values do not move with λ
+        dolfinx.la.petsc._ghost_update(f, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        if self.constant:
+            self._cache = f.copy()
+
+
+# -- probes --------------------------------------------------------------------------------------
+class DofProbe:
+    """One scalar dof of the unknown, e.g. u_z at a mesh node: e·q with e a unit vector.
+
+    Build it with :meth:`at_point`, or from a vector ``e`` of the mixed space directly.
+    """
+
+    def __init__(self, model, e: PETSc.Vec):
+        self.model = model
+        self.e = e
+        self.comm = e.getComm().tompi4py()
+
+    @classmethod
+    def at_point(
+        cls, model, point: Sequence[float], component: int, field: int = 0, tol: float = 1e-8
+    ) -> DofProbe:
+        """The dof of u (``field`` 0) or θ (1), Cartesian ``component`` 0–2, at a mesh node.
+
+        At a vertex the dof is the point value also for the P2+bubble displacement (the bubble
+        vanishes there).
+        """
+        p = np.asarray(point, dtype=np.float64)
+        sub = model.Q.sub(field).sub(component)
+        Vc, _ = sub.collapse()
+        dofs = dolfinx.fem.locate_dofs_geometrical(
+            (sub, Vc), lambda x: np.linalg.norm(x.T - p[None, :], axis=1) < tol
+        )[0]
+        n_owned = model.Q.dofmap.index_map.size_local * model.Q.dofmap.index_map_bs
+        owned = dofs[dofs < n_owned]
+        comm = model.Q.mesh.comm
+        if comm.allreduce(len(owned), op=MPI.SUM) != 1:
+            raise ValueError(f"no single mesh node at {tuple(p)} (field {field}, comp {component})")
+        return cls(model, _unit_vector(model.Q, owned))
+
+    def of(self, x: PETSc.Vec) -> float:
+        """e·x for a vector of the mixed space."""
+        return float(self.e.dot(x))
+
+    def __call__(self) -> float:
+        """The dof's current value in ``model.q``."""
+        e = self.e.array_r
+        local = float(np.dot(e, self.model.q.x.array[: len(e)]))
+        return self.comm.allreduce(local, op=MPI.SUM)
+
+
+def _unit_vector(Q, owned_local: np.ndarray) -> PETSc.Vec:
+    e = dolfinx.fem.petsc.create_vector(Q)
+    e.zeroEntries()
+    with e.localForm() as el:
+        el.array[np.asarray(owned_local, dtype=np.int64)] = 1.0
+    e.assemble()
+    return e
+
+
+def displacement_weights(model) -> PETSc.Vec:
+    """Diagonal weights W of the arc length: 1 on the displacement dofs, 0 on the rotations."""
+    w = dolfinx.fem.petsc.create_vector(model.Q)
+    w.zeroEntries()
+    _, dofs = model.Q.sub(0).collapse()
+    n_owned = model.Q.dofmap.index_map.size_local * model.Q.dofmap.index_map_bs
+    dofs = np.asarray(dofs)
+    with w.localForm() as wl:
+        wl.array[dofs[dofs < n_owned]] = 1.0
+    w.assemble()
+    return w
+
+
+# -- the bordering loop ----------------------------------------------------------------------------
+@dataclass
+class _Stats:
+    """Work of a path follower, accumulated over its runs."""
+
+    increments: int = 0
+    cuts: int = 0
+    newton_iterations: int = 0
+    factorisations: int = 0
+    wall: float = 0.0
+
+
+class _PathFollower:
+    """Newton with a bordered constraint on (q, λ); subclasses give predictor and corrector."""
+
+    def __init__(
+        self,
+        solver: NonlinearSolver,
+        *,
+        monitor: Callable[[], float] | None = None,
+        max_it: int = 12,
+        target_iterations: int = 4,
+        max_growth: float = 2.0,
+        max_cuts: int = 8,
+        rtol: float = 1e-8,
+        on_step: Callable[[PathPoint], None] | None = None,
+    ):
+        self.solver = solver
+        self.model = solver.model
+        self.monitor = monitor
+        self.max_it, self.target_iterations = max_it, target_iterations
+        self.max_growth, self.max_cuts = max_growth, max_cuts
+        self.rtol = rtol
+        self.on_step = on_step
+        self.history: list[PathPoint] = []
+        self.stats = _Stats()
+        p = solver.problem
+        self.x = p.x
+        self.r = p.b
+        self.f = p.b.duplicate()
+        self.dq_r = p.b.duplicate()
+        self.dq_t = p.b.duplicate()
+        self.Dq = p.b.duplicate()  # increment from the last converged point
+        self.Dq_prev = p.b.duplicate()
+        self.Dq_prev.zeroEntries()
+        self.x_n = p.b.duplicate()
+        self.tangent = _TangentLoad(solver)
+        self.ksp = p.solver.getKSP()
+        self.ksp.setOperators(p.A, p.P_mat if p.P_mat is not None else p.A)
+        self.lam = float(self.model.load_factor.value)
+        self.Dlam_prev = 0.0
+
+    # -- PETSc plumbing
+    def _sync_in(self) -> None:
+        dolfinx.fem.petsc.assign(self.model.q, self.x)
+
+    def _sync_out(self, x: PETSc.Vec) -> None:
+        dolfinx.la.petsc._ghost_update(x, PETSc.InsertMode.INSERT, PETSc.ScatterMode.FORWARD)
+        dolfinx.fem.petsc.assign(x, self.model.q)
+
+    def _residual(self, lam: float) -> float:
+        self.model.load_factor.value = lam
+        self.solver.problem.solver.computeFunction(self.x, self.r)
+        return float(self.r.norm())
+
+    def _factorise_and_tangent(self) -> bool:
+        p = self.solver.problem
+        p.solver.computeJacobian(self.x, p.A, p.P_mat if p.P_mat is not None else p.A)
+        self.stats.factorisations += 1
+        self.tangent.assemble(self.x, self.f)
+        self._sync_out(self.x)  # the tangent load copied x into q; keep them equal
+        self.ksp.solve(self.f, self.dq_t)
+        return bool(np.isfinite(self.dq_t.norm()))
+
+    # -- constraint (subclasses)
+    def _predict(self, step: float) -> float:  # returns Δλ of the tangent predictor
+        raise NotImplementedError
+
+    def _correct(self, step: float, Dlam: float) -> float | None:  # δλ, or None: no solution
+        raise NotImplementedError
+
+    def _adjust_step(self, step: float) -> float:  # e.g. land on a target
+        return step
+
+    def _value(self) -> float:
+        return float(self.monitor()) if self.monitor is not None else math.nan
+
+    # -- one increment
+    def _increment(self, step: float, tol: float) -> int | None:
+        """Advance by one increment of size ``step``; iterations, or None (state restored)."""
+        x, lam_n = self.x, self.lam
+        step = self._step = self._adjust_step(step)
+        x.copy(self.x_n)
+        self.model.load_factor.value = lam_n
+        ok = self._factorise_and_tangent()
+        Dlam = self._predict(step) if ok else math.nan
+        if not np.isfinite(Dlam):
+            return self._restore()
+        self.Dq.set(0.0)
+        self.Dq.axpy(Dlam, self.dq_t)
+        x.axpy(1.0, self.Dq)
+        self._sync_out(x)
+        for it in range(1, self.max_it + 1):
+            rnorm = self._residual(lam_n + Dlam)
+            if not np.isfinite(rnorm):
+                return self._restore()
+            if rnorm <= tol:
+                self.lam = lam_n + Dlam
+                self.Dlam_prev = Dlam
+                self.Dq.copy(self.Dq_prev)
+                self.stats.newton_iterations += it - 1
+                return max(it - 1, 1)
+            if not self._factorise_and_tangent():
+                return self._restore()
+            self.ksp.solve(self.r, self.dq_r)
+            self.dq_r.scale(-1.0)
+            dlam = self._correct(step, Dlam)
+            if dlam is None or not np.isfinite(dlam):
+                return self._restore()
+            self.dq_r.axpy(dlam, self.dq_t)  # δq = δq_R + δλ δq_T
+            self.Dq.axpy(1.0, self.dq_r)
+            Dlam += dlam
+            x.axpy(1.0, self.dq_r)
+            self._sync_out(x)
+        self.stats.newton_iterations += self.max_it
+        return self._restore()
+
+    def _restore(self) -> None:
+        self.x_n.copy(self.x)
+        self._sync_out(self.x)
+        self.model.load_factor.value = self.lam
+        return None
+
+    def _tolerance(self) -> float:
+        self.tangent.assemble(self.x, self.f)
+        self._sync_out(self.x)
+        atol = self.solver.problem.solver.getTolerances()[1]
+        return max(atol, self.rtol * float(self.f.norm()))
+
+    def _run(
+        self,
+        step: float,
+        *,
+        max_steps: int,
+        min_step: float,
+        max_step: float,
+        stop: Callable[[PathPoint], bool] | None,
+        lambda_max: float | None,
+    ) -> list[PathPoint]:
+        t0 = time.perf_counter()
+        self._sync_in()
+        self.lam = float(self.model.load_factor.value)
+        tol = self._tolerance()
+        cuts = done = 0
+        try:
+            while done < max_steps:
+                its = self._increment(step, tol)
+                if its is None:
+                    cuts += 1
+                    self.stats.cuts += 1
+                    step /= 2
+                    if cuts > self.max_cuts or step < min_step:
+                        raise SolveFailed(
+                            self.lam, self.max_it, 0,
+                            f"path following failed after λ = {self.lam:.6g} "
+                            f"({len(self.history)} increments; step {2 * step:.3g} cut "
+                            f"{cuts} times)",
+                        )  # fmt: skip
+                    continue
+                point = PathPoint(self.lam, self._value(), its, self._step, cuts)
+                self.history.append(point)
+                self.stats.increments += 1
+                done += 1
+                if self.on_step:
+                    self.on_step(point)
+                cuts = 0
+                if stop is not None and stop(point):
+                    break
+                if lambda_max is not None and self.lam >= lambda_max:
+                    break
+                factor = math.sqrt(self.target_iterations / max(its, 1))
+                step = min(max(step * min(max(factor, 0.5), self.max_growth), min_step), max_step)
+        finally:
+            self.model.load_factor.value = self.lam
+            self.stats.wall += time.perf_counter() - t0
+        return self.history
+
+
+class ArcLength(_PathFollower):
+    """Crisfield's arc-length continuation (cylindrical for ψ = 0) on a NonlinearSolver.
+
+    The constraint is ‖Δq‖²_W + ψ² Δλ² = Δs² with W = ``weights`` (diagonal, as a vector):
+    ``"displacement"`` (1 on u, 0 on θ, so that Δs is a length; the default for a shell model),
+    ``"all"`` (every dof; the default for other models) or a PETSc vector.
+    ``run(initial_load_step)`` sizes the first arc so that its tangent predictor is the load
+    step Δλ₀.
+    """
+
+    def __init__(
+        self,
+        solver: NonlinearSolver,
+        *,
+        weights: str | PETSc.Vec | None = None,
+        psi: float = 0.0,
+        **kw,
+    ):
+        super().__init__(solver, **kw)
+        if weights is None:  # a shell (u, θ): the displacements; anything else: every dof
+            weights = "displacement" if hasattr(solver.model, "kinematics") else "all"
+        if isinstance(weights, str):
+            if weights == "displacement":
+                weights = displacement_weights(solver.model)
+            elif weights == "all":
+                weights = None
+            else:
+                raise ValueError(f"weights must be 'displacement', 'all' or a Vec, got {weights!r}")
+        self.w = weights
+        self.psi2 = psi * psi
+        self._wv = solver.problem.b.duplicate()
+        self._a = solver.problem.b.duplicate()
+
+    def _wdot(self, a: PETSc.Vec, b: PETSc.Vec) -> float:
+        if self.w is None:
+            return float(a.dot(b))
+        self._wv.pointwiseMult(self.w, b)
+        return float(a.dot(self._wv))
+
+    def _predict(self, step: float) -> float:
+        tt = self._wdot(self.dq_t, self.dq_t)
+        dlam = step / math.sqrt(tt + self.psi2)
+        if self.history:
+            sign = self._wdot(self.Dq_prev, self.dq_t) + self.psi2 * self.Dlam_prev
+            dlam = math.copysign(dlam, sign) if sign != 0 else dlam
+        return dlam
+
+    def _correct(self, step: float, Dlam: float) -> float | None:
+        a = self._a  # Δq + δq_R
+        self.Dq.copy(a)
+        a.axpy(1.0, self.dq_r)
+        t = self.dq_t
+        A = self._wdot(t, t) + self.psi2
+        B = 2.0 * (self._wdot(t, a) + self.psi2 * Dlam)
+        C = self._wdot(a, a) + self.psi2 * Dlam * Dlam - step * step
+        disc = B * B - 4.0 * A * C
+        if disc < 0:
+            return None  # no real root: the caller cuts the step
+        sq = math.sqrt(disc)
+        q = -0.5 * (B + math.copysign(sq, B))
+        roots = [q / A, C / q] if q != 0 else [-B / (2 * A)]
+        # the root whose new increment turns least from the current one (Crisfield 1981)
+        aDq = self._wdot(a, self.Dq)
+        tDq = self._wdot(t, self.Dq)
+        return max(roots, key=lambda r: aDq + r * tDq + self.psi2 * (Dlam + r) * Dlam)
+
+    def arc_for_load_step(self, load_step: float) -> float:
+        """The arc length Δs of a tangent step Δλ = ``load_step`` from the current state."""
+        self._sync_in()
+        self.lam = float(self.model.load_factor.value)
+        if not self._factorise_and_tangent():
+            raise SolveFailed(self.lam, 0, 0, "the tangent stiffness is singular or not finite")
+        return abs(load_step) * math.sqrt(self._wdot(self.dq_t, self.dq_t) + self.psi2)
+
+    def run(
+        self,
+        initial_load_step: float,
+        *,
+        max_steps: int = 200,
+        max_step_ratio: float = 4.0,
+        min_step_ratio: float = 1e-4,
+        stop: Callable[[PathPoint], bool] | None = None,
+        lambda_max: float | None = None,
+    ) -> list[PathPoint]:
+        """Follow the path from the current state; stop after ``max_steps`` increments, when
+        ``stop(point)`` is true or when λ ≥ ``lambda_max``. The arc length of the first increment
+        is that of a tangent step Δλ₀ = ``initial_load_step``; later ones adapt within
+        [``min_step_ratio``, ``max_step_ratio``] × that."""
+        ds = self.ds0 = self.arc_for_load_step(initial_load_step)
+        return self._run(
+            ds, max_steps=max_steps, min_step=min_step_ratio * ds, max_step=max_step_ratio * ds,
+            stop=stop, lambda_max=lambda_max,
+        )  # fmt: skip
+
+
+class DisplacementControl(_PathFollower):
+    """Prescribe one dof (a :class:`DofProbe`), e·q = w, and solve for the load factor.
+
+    ``run(increment, target)`` moves w from its current value to ``target`` in steps that start
+    at ``increment`` and adapt to the Newton iterations like the arc length, landing on the
+    target. λ may rise and fall (snap-through), but a snap-back of the controlled dof itself
+    cannot be followed, and it is not detected either: beyond the turn Newton lands on another
+    branch at the same w (the 6.35 mm hinged roof: λ P_ref jumps from +382 N to −376 N between
+    w_C = 16.2 and 17.2 mm, where the path turns back at 17.0 mm). Use :class:`ArcLength` there.
+    """
+
+    def __init__(self, solver: NonlinearSolver, probe: DofProbe, **kw):
+        kw.setdefault("monitor", probe)
+        super().__init__(solver, **kw)
+        self.probe = probe
+        self.sign, self.target = 1.0, 0.0
+        self._w_n = 0.0
+
+    def _adjust_step(self, step: float) -> float:
+        self._w_n = self.probe.of(self.x)
+        remaining = abs(self.target - self._w_n)
+        return remaining if step > remaining or remaining - step < 0.3 * step else step
+
+    def _predict(self, step: float) -> float:
+        et = self.probe.of(self.dq_t)
+        return self.sign * step / et if et != 0 else math.nan
+
+    def _correct(self, step: float, Dlam: float) -> float | None:
+        et = self.probe.of(self.dq_t)
+        if et == 0:
+            return None
+        # e·(x + δq_R + δλ δq_T) = w_n ± step
+        w = self._w_n + self.sign * step
+        return (w - self.probe.of(self.x) - self.probe.of(self.dq_r)) / et
+
+    def run(
+        self,
+        increment: float,
+        target: float,
+        *,
+        max_steps: int = 200,
+        max_increment: float | None = None,
+        min_increment: float | None = None,
+    ) -> list[PathPoint]:
+        """Move the controlled dof from its current value to ``target``."""
+        self._sync_in()
+        self.target = target
+        self.sign = math.copysign(1.0, target - self.probe())
+        step = abs(increment)
+        max_inc = abs(max_increment) if max_increment is not None else 8 * step
+        min_inc = abs(min_increment) if min_increment is not None else 1e-4 * step
+        tol = 1e-12 * max(abs(target), 1.0)
+
+        def reached(point: PathPoint) -> bool:
+            return abs(point.value - target) <= tol
+
+        return self._run(
+            step, max_steps=max_steps, min_step=min_inc, max_step=max_inc, stop=reached,
+            lambda_max=None,
+        )  # fmt: skip
+
+
+# -- PETSc's SNESNEWTONAL, for comparison ------------------------------------------------------
+@dataclass
+class NewtonALResult:
+    history: list[PathPoint] = field(default_factory=list)
+    reason: int = 0
+    iterations: int = 0
+    wall: float = 0.0
+
+
+def newtonal_path(
+    solver: NonlinearSolver,
+    step_size: float,
+    *,
+    psisq: float = 0.0,
+    lambda_max: float = 1.0,
+    lambda_min: float = -1.0,
+    max_steps: int = 200,
+    max_it: int = 25,
+    correction: str = "exact",
+    monitor: Callable[[], float] | None = None,
+    prefix: str = "garment_newtonal_",
+) -> NewtonALResult:
+    """The whole path from λ = 0 and q = 0 (``model.q`` is reset) to ``lambda_max`` with PETSc's
+    ``SNESNEWTONAL``.
+
+    Fixed arc length ``step_size`` (every dof weighted alike, plus ``psisq`` Δλ²), the
+    residual and Jacobian of ``solver`` (its callbacks, with λ read from the SNES), the tangent
+    load of :func:`tangent_load_form` plus the point loads. One failed increment ends the path
+    (``reason`` < 0). Needs petsc4py ≥ 3.22 (``SNES.Type.NEWTONAL``).
+    """
+    S = PETSc.SNES
+    for name in ("setNewtonALFunction", "getNewtonALLoadParameter", "setNewtonALCorrectionType"):
+        if not hasattr(S, name):
+            raise RuntimeError(f"petsc4py has no SNES.{name}: SNESNEWTONAL needs PETSc >= 3.22")
+    if not hasattr(S.Type, "NEWTONAL"):
+        raise RuntimeError("this PETSc has no SNESNEWTONAL")
+    t0 = time.perf_counter()
+    model, p = solver.model, solver.problem
+    base = p.solver
+    b_vec, (residual_cb, _, _) = base.getFunction()
+    _, _, (jacobian_cb, _, _) = base.getJacobian()
+    tangent = _TangentLoad(solver)
+    model.q.x.array[:] = 0.0
+    model.q.x.scatter_forward()
+    snes = PETSc.SNES().create(p.x.getComm())
+    snes.setType(PETSc.SNES.Type.NEWTONAL)
+
+    def residual(snes_, x, b):
+        model.load_factor.value = snes_.getNewtonALLoadParameter()
+        residual_cb(snes_, x, b)
+
+    def jacobian(snes_, x, J, P):
+        model.load_factor.value = snes_.getNewtonALLoadParameter()
+        jacobian_cb(snes_, x, J, P)
+
+    def tangent_load(snes_, x, f):
+        tangent.assemble(x, f)
+
+    result = NewtonALResult()
+    values: list[tuple[float, float, int]] = []
+    last_it = [0]
+
+    def record(snes_, its, fnorm):
+        if snes_.getConvergedReason() > 0:
+            dolfinx.fem.petsc.assign(snes_.getSolution(), model.q)
+            value = float(monitor()) if monitor is not None else math.nan
+            values.append((snes_.getNewtonALLoadParameter(), value, its - last_it[0]))
+            last_it[0] = its
+
+    snes.setFunction(residual, b_vec.duplicate())
+    snes.setJacobian(jacobian, p.A, p.P_mat if p.P_mat is not None else p.A)
+    snes.setNewtonALFunction(tangent_load)
+    snes.setMonitor(record)
+    ctype = {"exact": S.NewtonALCorrectionType.EXACT, "normal": S.NewtonALCorrectionType.NORMAL}
+    snes.setNewtonALCorrectionType(ctype[correction])
+    rtol, atol, stol, _ = base.getTolerances()
+    snes.setTolerances(rtol=rtol, atol=atol, stol=stol, max_it=max_it)
+    ksp, base_ksp = snes.getKSP(), base.getKSP()
+    ksp.setType(base_ksp.getType())
+    ksp.getPC().setType(base_ksp.getPC().getType())
+    if base_ksp.getPC().getType() in ("lu", "cholesky"):
+        ksp.getPC().setFactorSolverType(base_ksp.getPC().getFactorSolverType())
+    opts = PETSc.Options()
+    settings = {
+        "snes_newtonal_step_size": step_size,
+        "snes_newtonal_psisq": psisq,
+        "snes_newtonal_lambda_max": lambda_max,
+        "snes_newtonal_lambda_min": lambda_min,
+        "snes_newtonal_max_continuation_steps": max_steps,
+    }
+    snes.setOptionsPrefix(prefix)
+    for k, v in settings.items():
+        opts[f"{prefix}{k}"] = v
+    try:
+        snes.setFromOptions()
+    finally:
+        for k in settings:
+            del opts[f"{prefix}{k}"]
+    x = p.x.duplicate()
+    x.zeroEntries()
+    snes.solve(None, x)
+    dolfinx.fem.petsc.assign(x, model.q)
+    model.load_factor.value = snes.getNewtonALLoadParameter()
+    result.reason = int(snes.getConvergedReason())
+    result.iterations = int(snes.getIterationNumber())
+    result.history = [PathPoint(lam, val, its, step_size, 0) for lam, val, its in values]
+    result.wall = time.perf_counter() - t0
+    snes.destroy()
+    x.destroy()
+    return result
