@@ -363,17 +363,18 @@ LIMB_SCENES = {
 }
 
 
-#: Known failures since the stick penalty became the skin's G/depth and the dressing spring's scale
-#: E h / L² (fixed L) instead of both growing as 1/ℓ² (issue 15): the scan sleeve's augmented
-#: Lagrangian ends just above its tolerance (6.7 µm against 6.2 µm after 8 updates, also after 12)
-#: and the scan stocking's ankle band is +28 % from Laplace (+11.7 % before). Open in issue 17.
-_LIMB_XFAIL = pytest.mark.xfail(reason="scan limbs on the mesh-independent stick/spring scales: "
-                                "AL above tolerance (sleeve), ankle +28 % (stocking)",
-                                strict=False)  # fmt: skip
+#: Known failure: the scan stocking's ankle band is +28 % from Laplace (3749 against 2920 Pa,
+#: measured 2026-12-03 with the spring anchored at the start; +11.7 % before the stick penalty
+#: became the skin's G/depth). The scan sleeve passes again since the dressing spring is
+#: anchored at the start (forearm +0.5 %, elbow +3.2 %). Open in issue 17.
+_LIMB_XFAIL = pytest.mark.xfail(reason="scan stocking: ankle band +28 % from Laplace", strict=False)
+_LIMB_MARKS = {"scan_stocking.toml": [_LIMB_XFAIL]}
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("scene_file", [pytest.param(f, marks=_LIMB_XFAIL) for f in LIMB_SCENES])
+@pytest.mark.parametrize(
+    "scene_file", [pytest.param(f, marks=_LIMB_MARKS.get(f, [])) for f in LIMB_SCENES]
+)
 def test_limb_garment_on_the_scan_against_laplace(scene_file, tmp_path):
     """A sleeve (stocking) dressed on the scan's own left arm (leg): the run completes with the
     spring released and penetration below 1 % of the thickness; at each compared level the

@@ -43,7 +43,7 @@ def point_load_vector(model, loads: list[PointLoad]) -> PETSc.Vec:
         geom = mesh.geometry
         for cell, x0 in zip(cells, dest_pts, strict=True):
             X = geom.x[geom.dofmap[cell]]
-            ref = geom.cmap.pull_back(x0.reshape(1, 3), X)
+            ref = geom.cmaps[0].pull_back(x0.reshape(1, 3), X)
             force = np.array(_loads_by_nearest(loads, x0).force)
             for comp in range(3):
                 sub = Q.sub(0).sub(comp)

@@ -263,9 +263,8 @@ def cantilever_end_shear(
 ) -> CaseResult:
     """Sze et al. 2004, §3.1: cantilever under end shear P = 4 (L=10, b=1, h=0.1, E=1.2e6, ν=0).
 
-    Reference at P = 4: −u_tip = 3.286? no — Sze Table 1 gives −u = 3.287 and w = 6.698 at
-    P_max; here the issue's values −u_tip 3.286, w_tip 6.698. The value returned is w_tip; −u_tip is
-    in ``extra``.
+    Reference at P = 4: Sze et al. 2004, Table 1, −u_tip = 3.287 and w_tip = 6.698 (the elastica
+    gives −u/L = 0.32894, w/L = 0.66996). The value returned is w_tip; −u_tip is in ``extra``.
     """
     t0 = time.perf_counter()
     L, b = 10.0, 1.0
