@@ -395,8 +395,8 @@ def _release(
     With ``fixed`` the spring constants are c₀·``ratio``ᵏ down to c₀·:data:`C_ZERO`, then 0 (the
     same on every mesh); a failed solve is retried, every second time with a sub-step half-way
     (in log c) from the last c that converged, after which the schedule goes on from the c that
-    failed; with the spring anchored at the previous step, a solve that needs no Newton
-    iteration (nothing moves, so the spring carries no force) is followed by c = 0 at once.
+    failed; a solve that needs no Newton iteration and leaves the spring unstretched (anchored
+    at the previous step: nothing moves, so it carries no force) is followed by c = 0 at once.
     Otherwise (adaptive):
 
     The spring pulls towards the previous step, so each solve is an exact equilibrium up to the
@@ -488,8 +488,8 @@ def _release_loop(
         elif fixed:
             if pr.c_target >= 0 and c > pr.c_target:  # a sub-step: back to the schedule
                 pr.c = pr.c_target
-            elif its == 0 and reg.anchor == "previous":  # nothing moved: the spring carries
-                pr.c = 0.0  # no force, the rest of the schedule is a no-op
+            elif its == 0 and moved == 0.0:  # nothing moved and the spring carries no force
+                pr.c = 0.0  # (anchored at the previous step): the rest is a no-op
             else:
                 pr.c = c * ratio if c * ratio >= C_ZERO * reg.c0 else 0.0
             if pr.c_target >= 0 and pr.c <= pr.c_target:

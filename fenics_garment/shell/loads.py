@@ -42,7 +42,7 @@ def point_load_vector(model, loads: list[PointLoad]) -> PETSc.Vec:
     if len(cells):
         geom = mesh.geometry
         for cell, x0 in zip(cells, dest_pts, strict=True):
-            X = geom.x[geom.dofmap[cell]]
+            X = geom.x[geom.dofmaps[0][cell]]
             ref = geom.cmaps[0].pull_back(x0.reshape(1, 3), X)
             force = np.array(_loads_by_nearest(loads, x0).force)
             for comp in range(3):

@@ -350,25 +350,13 @@ class ShellModel:
         """
         self._energy.append((density, measure or self.dx_full))
 
-    def external_work(self) -> ufl.Form | None:
-        forms = [self.load_factor * w * m for w, m in self._work]
-        return sum(forms[1:], forms[0]) if forms else None
-
     def residual(self) -> ufl.Form:
-        """F(q; δq) = δΠ_int − λ δW_ext + follower and extra terms."""
-        v = ufl.TestFunction(self.Q)
-        Pi = self.internal_energy()
-        W = self.external_work()
-        total = Pi - W if W is not None else Pi
-        F = ufl.derivative(total, self.q, v)
-        if self._follower:
-            kin = self.kinematics()
-            v_u = ufl.split(v)[0]
-            for p in self._follower:
-                F += self.load_factor * terms.pressure_residual(kin, p, v_u) * self.dx_full
-        points = self._point_forces(ufl.split(v)[0])
-        if points is not None:
-            F -= self.load_factor * points
+        """F(q; δq) = δΠ_int − λ f + extra terms, with f the loads at λ = 1
+        (:meth:`tangent_load`: dead work, follower pressures, point forces)."""
+        F = ufl.derivative(self.internal_energy(), self.q, ufl.TestFunction(self.Q))
+        f = self.tangent_load()
+        if f is not None:
+            F -= self.load_factor * f
         for extra in self._extra_residual:
             F += self.extra_switch * (extra if isinstance(extra, ufl.Form) else extra())
         return F
