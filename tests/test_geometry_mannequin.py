@@ -122,3 +122,36 @@ def test_second_order_body():
         r for r in b1.regions if len(b1.triangles_of(r))
     }
     assert set(b2.regions) <= set(REGIONS)
+
+
+@pytest.mark.parametrize("level", ["waist", "underbust", "bust", "hip"])
+def test_sections_are_smooth_across_the_side_lines(level):
+    """The back and front halves of a section meet with one tangent and (to 5 %) one
+    curvature at +x and −x: a kink of angle θ there would carry a line force Tθ from a garment
+    in hoop tension T (a pressure that grows without limit as the garment mesh is refined)."""
+    import gmsh
+
+    from fenics_garment.geometry.gmsh_utils import gmsh_session
+    from fenics_garment.geometry.mannequin import section_wire, torso_sections
+
+    z, pts = torso_sections(measurements("88"))[level]
+    with gmsh_session(name="wire") as g:
+        section_wire(g, pts, z)
+        g.model.occ.synchronize()
+        (_, back), (_, front) = g.model.getEntities(1)
+
+        def ends(c):
+            lo, hi = (b[0] for b in gmsh.model.getParametrizationBounds(1, c))
+            out = []
+            for u in (lo, hi):
+                d = np.array(gmsh.model.getDerivative(1, c, [u]))
+                out.append((np.array(gmsh.model.getValue(1, c, [u])), d / np.linalg.norm(d),
+                            gmsh.model.getCurvature(1, c, [u])[0]))  # fmt: skip
+            return out
+
+        (b0, b1), (f0, f1) = ends(back), ends(front)
+    for (xa, ta, ka), (xb, tb, kb) in ((b1, f0), (f1, b0)):  # at −x, then at +x
+        assert np.linalg.norm(xa - xb) < 1e-9
+        assert abs(xa[1]) < 0.02 and abs(xa[0]) > 0.1  # a lateral point
+        assert np.degrees(np.arccos(min(1.0, ta @ tb))) < 0.01
+        assert ka == pytest.approx(kb, rel=0.05)

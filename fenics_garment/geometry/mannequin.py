@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.interpolate import BSpline
 
 from .body import BodySurface, finish_body
 from .gmsh_utils import gmsh_session
@@ -114,29 +115,70 @@ def add_loft(
     solid: bool = True,
     max_degree: int = -1,
 ):
-    """OCC loft through closed sections; each wire is a back half and a front half spline.
+    """OCC loft through closed sections; each wire is a back half and a front half.
 
     ``max_degree`` caps the degree of the loft surface across the sections (−1: OCC's default).
     With OCC's default the dress's flared skirt (sections 15 cm apart below a narrow waist)
     overshoots into a fold that crosses the garment's axis near the hem: the dress uses 3.
 
     The halves meet at the lateral points (+x and −x), so an open loft yields two faces
-    (back first, then front) sharing the side lines; returns the OCC entities made.
+    (back first, then front) sharing the side lines; returns the OCC entities made. The halves
+    are the two pieces of one periodic spline (:func:`section_wire`), so the surface is smooth
+    across the side lines.
     """
-    from .sections import resample_by_angle
-
-    wires = []
-    for z, pts in secs.values():
-        c = pts.mean(axis=0)
-        p = resample_by_angle(pts, n_pts, centre=c)
-        tags = [g.model.occ.addPoint(x, y, z) for x, y in p]
-        half = n_pts // 2
-        back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
-        front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
-        wires.append(g.model.occ.addWire([back, front]))
+    wires = [section_wire(g, pts, z, n_pts) for z, pts in secs.values()]
     return g.model.occ.addThruSections(
         wires, makeSolid=solid, makeRuled=False, maxDegree=max_degree
     )
+
+
+def section_wire(g, pts: np.ndarray, z: float, n_pts: int = 24) -> int:
+    """A closed horizontal section at height ``z``: the periodic cubic B-spline interpolating
+    ``n_pts`` points of the (x, y) curve ``pts`` resampled by angle (uniform knots), as two
+    clamped pieces meeting at the lateral points (+x, −x) — a back half (+x → +y → −x) and a
+    front half (−x → −y → +x); returns the wire.
+
+    The pieces are exact restrictions of one C² curve (:func:`periodic_halves`), so the section
+    has one tangent and one curvature at the side lines. Two splines interpolating the halves
+    separately met at a kink, 9.7° at the size-88 waist and 12.5° at the underbust: a garment in
+    hoop tension T over a kink of angle θ carries a line force Tθ, and the pressure at the sides
+    grew without limit as the garment mesh was refined (waist p95 +5–6 % per √2 level).
+    """
+    from .sections import resample_by_angle
+
+    occ = g.model.occ
+    p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
+    side = [occ.addPoint(*p[0], z), occ.addPoint(*p[len(p) // 2], z)]  # +x, −x: shared ends
+    curves = []
+    for k, (ctrl, knots) in enumerate(periodic_halves(p)):
+        inner = [occ.addPoint(x, y, z) for x, y in ctrl[1:-1]]
+        tags = [side[k], *inner, side[1 - k]]
+        mult = [4] + [1] * (len(knots) - 2) + [4]
+        curves.append(occ.addBSpline(tags, degree=3, knots=knots.tolist(), multiplicities=mult))
+        occ.remove([(0, t) for t in inner])
+    return occ.addWire(curves)
+
+
+def periodic_halves(p: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The periodic cubic B-spline through the closed polygon ``p`` (n, 2), node i at knot i,
+    split at knots 0 and n/2: per half its control points and distinct knots (clamped ends).
+
+    The control points Q solve (Q_{i−1} + 4 Q_i + Q_{i+1}) / 6 = p_i (cyclic); each half is cut
+    out by raising its end knots to multiplicity 3 (Boehm insertion: the curve is unchanged).
+    """
+    n = len(p)
+    if n % 2:
+        raise ValueError(f"a section needs an even number of points, not {n}")
+    a = (4.0 * np.eye(n) + np.roll(np.eye(n), 1, axis=1) + np.roll(np.eye(n), -1, axis=1)) / 6
+    q = np.linalg.solve(a, p)
+    t = np.arange(-3.0, n + 4.0)
+    curve = BSpline(t, q[np.arange(-1, n + 2) % n], 3)
+    halves = []
+    for lo, hi in ((0.0, n / 2), (n / 2, float(n))):
+        c = curve.insert_knot(lo, 2).insert_knot(hi, 2)
+        i_lo, i_hi = np.searchsorted(c.t, lo), np.searchsorted(c.t, hi)
+        halves.append((c.c[i_lo - 1 : i_hi], np.arange(lo, hi + 0.5)))
+    return halves
 
 
 def make_mannequin(
