@@ -75,13 +75,13 @@ def test_a_failed_raise_goes_back_and_converges_at_the_last_penalty(point):
     assert point.lam.array[0] == pytest.approx(point.load, rel=1e-5)
 
 
-def test_a_failure_at_a_converged_penalty_ends_the_loop(point):
+def test_a_failure_at_a_converged_penalty_is_tried_once_more_then_ends_the_loop(point):
     kappa = _Constant(1.0)
     calls = []
 
     def solve():
         calls.append(kappa.value)
-        if len(calls) == 3:
+        if len(calls) >= 3:
             return 3, -3
         point.solve(kappa.value)
         return 3, 2
@@ -90,4 +90,24 @@ def test_a_failure_at_a_converged_penalty_ends_the_loop(point):
         point, 1.0, solve, tol=1e-9, max_updates=20, stiffen=None, unknown=point.gap
     )
     assert not al.converged
-    assert len(calls) == 3
+    assert al.recoveries == ["plain step"]
+    assert len(calls) == 4
+
+
+def test_a_failed_tenfold_raise_is_tried_again_smaller(point):
+    kappa = _Constant(1.0)
+    largest = 50.0  # the ×10 raise to 100 fails, the ×√10 one to 31.6 does not
+
+    def solve():
+        if kappa.value > largest:
+            return 3, -3
+        point.solve(kappa.value)
+        return 3, 2
+
+    al = uzawa.augmented_lagrangian(
+        point, 1.0, solve, tol=1e-6, max_updates=80, stiffen=kappa, unknown=point.gap
+    )
+    assert al.converged
+    assert al.recoveries[0] == "smaller raise"
+    assert 10.0 * np.sqrt(10.0) in [pytest.approx(k) for k in al.kappa]
+    assert point.lam.array[0] == pytest.approx(point.load, rel=1e-5)

@@ -87,6 +87,7 @@ class DressReport:
     al_updates: int = 0
     al_penetration: list[float] = field(default_factory=list)
     al_kappa: list[float] = field(default_factory=list)  # the penalty of each pass [Pa/m]
+    al_recoveries: list[str] = field(default_factory=list)  # after failed passes (uzawa)
     completed: bool = False
 
     @property
@@ -113,6 +114,7 @@ class DressReport:
             "augmented_lagrangian_updates": self.al_updates,
             "augmented_lagrangian_penetration_m": self.al_penetration,
             "augmented_lagrangian_kappa_Pa_per_m": self.al_kappa,
+            "augmented_lagrangian_recoveries": self.al_recoveries,
             "completed": self.completed,
         }
 
@@ -362,6 +364,7 @@ def dress(
             rep.al_updates = len(al.penetration) - 1
             rep.al_penetration = al.penetration
             rep.al_kappa = al.kappa
+            rep.al_recoveries = al.recoveries
             pr.kappa = float(contact.kappa.value)
             if not al.converged:
                 raise DressingFailed(
