@@ -67,7 +67,7 @@ QUICK = {"tube_on_cylinder": (0.04, 3)}
 #: Regions whose p95 the issue asks to know to ±3 %.
 KEY_REGIONS = ("waist", "upper_chest", "bust", "underbust", "upper_back")
 TARGET = 0.03
-STATS = ("mean", "p95", "max")
+STATS = ("mean", "p95", "max", "sensor_p95")
 
 
 def sizes(h0: float, n: int) -> list[float]:
@@ -126,6 +126,8 @@ def analyse(recs: list[dict]) -> dict:
     for name in ok[-1]["regions_p95_kPa"]:
         row = {}
         for s in STATS:
+            if any(f"regions_{s}_kPa" not in r for r in ok):  # a record from before the statistic
+                continue
             vals = [r[f"regions_{s}_kPa"].get(name, 0.0) for r in ok]
             if max(vals) <= 0.0:
                 continue
@@ -141,15 +143,15 @@ def analyse(recs: list[dict]) -> dict:
             row[s]["error_bars_estimate"] = own
         if row:
             out["regions"][name] = row
-    met = []
-    for k in range(len(ok)):
-        ok_k = all(
-            out["regions"][n]["p95"]["relative_error"][k] <= TARGET
-            for n in KEY_REGIONS if n in out["regions"] and "p95" in out["regions"][n]
-        )  # fmt: skip
-        met.append(ok_k)
-    out["key_p95_within_target"] = met
-    out["coarsest_meeting_target_m"] = next((h for h, m in zip(hs, met, strict=True) if m), None)
+    for s, key in (("p95", ""), ("sensor_p95", "_sensor")):
+        met = [all(out["regions"][n][s]["relative_error"][k] <= TARGET
+                   for n in KEY_REGIONS if s in out["regions"].get(n, {}))
+               for k in range(len(ok))]  # fmt: skip
+        if any(s in row for row in out["regions"].values()):
+            out[f"key{key}_p95_within_target"] = met
+            out[f"coarsest{key}_meeting_target_m"] = next(
+                (h for h, m in zip(hs, met, strict=True) if m), None
+            )
     return out
 
 
@@ -177,19 +179,21 @@ def markdown(d: dict) -> str:
                 f"{r['newton_its']} | {r['failed_attempts']} | {r['completed']} | "
                 f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |"
             )
-        out += ["", "| region | p95 per mesh | order | finest ± uncertainty | --error-bars |",
-                "|---|---|---|---|---|"]  # fmt: skip
-        for name, row in ana.get("regions", {}).items():
-            c = row.get("p95")
-            if not c:
+        for s, label in (("p95", "p95"), ("sensor_p95", "sensor p95 (2 cm sensor)")):
+            rows = [(n, row[s]) for n, row in ana.get("regions", {}).items() if s in row]
+            if not rows:
                 continue
-            vals = " / ".join(f"{v:.3f}" for v in c["values"])
-            out.append(
-                f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
-                f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} |"
-            )
-        target = ana.get("key_p95_within_target")
-        out += ["", f"Key regions' p95 within ±{TARGET:.0%} at each mesh: {target}", ""]
+            out += ["", f"| region | {label} per mesh | order | finest ± uncertainty | "
+                    "--error-bars |", "|---|---|---|---|---|"]  # fmt: skip
+            for name, c in rows:
+                vals = " / ".join(f"{v:.3f}" for v in c["values"])
+                out.append(
+                    f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
+                    f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} |"
+                )
+            key = "key_p95_within_target" if s == "p95" else "key_sensor_p95_within_target"
+            out += ["", f"Key regions' {label} within ±{TARGET:.0%} at each mesh: "
+                    f"{ana.get(key)}", ""]  # fmt: skip
         png = f"convergence-{stem.replace(':', '-')}.png"
         if (RESULTS / png).exists():
             out += [f"![convergence-{stem}]({png})", ""]
@@ -202,19 +206,23 @@ def plot(stem: str, ana: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(6.4, 4.2))
-    for name, row in ana["regions"].items():
-        if "p95" not in row:
-            continue
-        c = row["p95"]
-        ax.errorbar([1e3 * h for h in c["sizes"]], c["values"], yerr=c["error"], marker="o",
-                    capsize=3, label=f"{name} (p = {c['order']:.2g})")  # fmt: skip
-    ax.set_xscale("log")
-    ax.invert_xaxis()
-    ax.set_xlabel("garment mesh size h [mm]")
-    ax.set_ylabel("p95 pressure [kPa]")
-    ax.set_title(f"{stem}: p95 per region, error bars = grid convergence index")
-    ax.legend(fontsize=7)
+    stats = [s for s in ("p95", "sensor_p95") if any(s in r for r in ana["regions"].values())]
+    fig, axes = plt.subplots(1, len(stats), figsize=(6.4 * len(stats), 4.2), squeeze=False)
+    for ax, s in zip(axes[0], stats, strict=True):
+        for name, row in ana["regions"].items():
+            if s not in row:
+                continue
+            c = row[s]
+            ax.errorbar([1e3 * h for h in c["sizes"]], c["values"], yerr=c["error"],
+                        marker="o", capsize=3, label=f"{name} (p = {c['order']:.2g})")  # fmt: skip
+        ax.set_xscale("log")
+        ax.invert_xaxis()
+        ax.set_xlabel("garment mesh size h [mm]")
+        what = "p95" if s == "p95" else "p95 of a 2 cm sensor's reading"
+        ax.set_ylabel(f"{what} [kPa]")
+        ax.set_title(f"{stem}: {what} per region\n(error bars: grid convergence index)",
+                     fontsize=9)  # fmt: skip
+        ax.legend(fontsize=7)
     fig.tight_layout()
     fig.savefig(RESULTS / f"convergence-{stem.replace(':', '-')}.png", dpi=110)
     plt.close(fig)

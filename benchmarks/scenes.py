@@ -187,6 +187,7 @@ def _record(res, spec: dict, comm) -> dict:
         "regions_mean_kPa": {r["region"]: r["mean_kPa"] for r in sm["regions"]},
         "regions_p95_kPa": {r["region"]: r["p95_kPa"] for r in sm["regions"]},
         "regions_max_kPa": {r["region"]: r["max_kPa"] for r in sm["regions"]},
+        "regions_sensor_p95_kPa": {r["region"]: r["sensor_p95_kPa"] for r in sm["regions"]},
         "element": sm["element"],
         "geometry_degree": sm.get("geometry_degree"),
         "max_penetration_over_thickness": sm["max_penetration_over_thickness"],

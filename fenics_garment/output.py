@@ -134,8 +134,33 @@ def weighted_percentile(values: Array, weights: Array, q: float) -> float:
     return float(np.interp(q / 100.0 * cum[-1], mid, v))
 
 
+def sensor_pressure(centres: Array, x: Array, force: Array, area: Array, radius: float) -> Array:
+    """The reading of a round pressure sensor of ``radius`` [m] centred at each of ``centres``
+    (m, 3): the contact force over the garment area within ``radius`` of the centre,
+    Σ f_j / Σ a_j over the garment points j (positions ``x``, forces ``force`` [N], areas
+    ``area`` [m²], all points, pressed or not) [Pa].
+
+    Clothing pressure is measured with sensors a couple of centimetres across (the air-pack
+    sensors of AMI Techno's AMI3037 series are 20 mm in diameter; Kikuhime's probe is 30 mm),
+    which average the pressure over their pad. Unlike the pressure at a point, the reading of a
+    sensor of fixed size converges as the garment mesh is refined: it does not see the
+    cell-to-cell scatter of a discrete contact traction (±11–15 % about its local mean on the
+    cotton gilet at every mesh) nor the sharpening of a narrow peak.
+    """
+    from scipy.spatial import cKDTree
+
+    if len(centres) == 0:
+        return np.zeros(0)
+    balls = cKDTree(x).query_ball_point(centres, radius)
+    return np.array([force[j].sum() / area[j].sum() for j in balls])
+
+
 def region_table(
-    regions: dict[str, int], region: npt.NDArray[np.int32], p: Array, area: Array
+    regions: dict[str, int],
+    region: npt.NDArray[np.int32],
+    p: Array,
+    area: Array,
+    sensor: Array | None = None,
 ) -> list[dict]:
     """Per body region: contact area and mean / max / 95th-percentile pressure (kPa and mmHg).
 
@@ -144,6 +169,9 @@ def region_table(
         region: the body region under each garment contact point (its closest body triangle's).
         p: pressure at each contact point [Pa] (contact force over deformed area).
         area: deformed area carried by each contact point [m²].
+        sensor: the reading of a pressure sensor centred at each contact point [Pa]
+            (:func:`sensor_pressure`); gives the rows' ``sensor_p95`` (its area-weighted
+            95th percentile over the region).
 
     Only points in contact (p > 0) count. Statistics are area weighted, so a region half covered
     reports the pressure where it is pressed, and its contact area separately. The garment-side
@@ -156,8 +184,10 @@ def region_table(
         sel = (region == tag) & (p > 0)
         a, pr = area[sel], p[sel]
         mean = float(np.sum(pr * a) / np.sum(a)) if len(a) else 0.0
-        stats = (("mean", mean), ("p95", weighted_percentile(pr, a, 95.0)),
-                 ("max", float(pr.max()) if len(pr) else 0.0))  # fmt: skip
+        stats = [("mean", mean), ("p95", weighted_percentile(pr, a, 95.0)),
+                 ("max", float(pr.max()) if len(pr) else 0.0)]  # fmt: skip
+        if sensor is not None:
+            stats.append(("sensor_p95", weighted_percentile(sensor[sel], a, 95.0)))
         row: dict = {"region": name, "contact_area_m2": float(a.sum())}
         for key, val in stats:
             row[f"{key}_kPa"] = units.pa_to_kpa(val)

@@ -74,3 +74,36 @@ def test_csv_has_units_in_header():
     rows = output.region_table({"hips": 10}, np.array([10]), np.array([200.0]), np.array([1.0]))
     head = output.csv_text(rows).splitlines()[0].split(",")
     assert {"region", "mean_kPa", "p95_mmHg", "max_kPa", "contact_area_m2", "comfort"} <= set(head)
+
+
+def test_sensor_reading_is_the_force_over_the_area_within_its_radius():
+    """A plane grid of points, pressure p(x) = 1000 + 2000 x: a round sensor of radius R centred
+    anywhere in the interior reads the mean over its disc, the value at its centre (linear p),
+    and a point outside every ball reads the points it covers."""
+    h = 1e-3
+    g = np.arange(-50, 51) * h
+    x = np.array([[a, b, 0.0] for a in g for b in g])
+    a = np.full(len(x), h * h)
+    p = 1000.0 + 2000.0 * x[:, 0]
+    centres = np.array([[0.0, 0.0, 0.0], [20 * h, -10 * h, 0.0]])
+    radius = 10.5 * h  # no grid point at exactly the radius
+    got = output.sensor_pressure(centres, x, p * a, a, radius)
+    assert got == pytest.approx(1000.0 + 2000.0 * centres[:, 0], rel=1e-9)
+    # 1 kPa under the half disc x > 0 (the line x = 0 not pressed): the pressed share
+    step = np.where(x[:, 0] > 0, 1000.0, 0.0)
+    disc = np.linalg.norm(x - centres[0], axis=1) < radius
+    share = np.sum(disc & (x[:, 0] > 0)) / np.sum(disc)
+    assert output.sensor_pressure(centres[:1], x, step * a, a, radius)[0] == pytest.approx(
+        1000.0 * share, rel=1e-12
+    )
+    assert 0.45 < share < 0.5
+
+
+def test_region_table_sensor_p95_is_the_percentile_of_the_readings():
+    regions = {"waist": 7}
+    region = np.full(100, 7)
+    p = np.linspace(100.0, 1000.0, 100)
+    a = np.full(100, 1e-4)
+    (row,) = output.region_table(regions, region, p, a, sensor=np.full(100, 400.0))
+    assert row["sensor_p95_kPa"] == pytest.approx(0.4)
+    assert row["p95_kPa"] == pytest.approx(output.weighted_percentile(p, a, 95) / 1e3)

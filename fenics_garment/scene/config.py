@@ -176,7 +176,8 @@ class OutputConfig:
     xdmf: bool = True
     pictures: bool = True
     every_step: bool = True  # VTX frame per dressing step (else only the final state)
-    error_bars: bool = False  # also solve on a 2× coarser garment: Richardson error bars
+    error_bars: bool = False  # also solve on a √2× coarser garment: Richardson error bars
+    sensor_diameter: float = 0.02  # the round pressure sensor of the regions' sensor_p95 [m]
 
 
 @dataclass(frozen=True)
@@ -457,6 +458,9 @@ def _check(s: Scene) -> None:
     _one_of(d.spring_anchor, SPRING_ANCHORS, src, "dressing.spring_anchor")
     _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
              f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip
+    o = s.output
+    _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
+             f"is a sensor's diameter in metres, in (0, 0.2], got {o.sensor_diameter}")  # fmt: skip
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
              f"got {s.name!r}")  # fmt: skip

@@ -33,7 +33,7 @@ from fenics_garment.scene import config
 #: Convergence rate assumed for the bars and the coarse level's mesh size ratio (module doc).
 RATE = 1.0
 RATIO = 2.0**0.5
-STATS = ("mean", "p95", "max")
+STATS = ("mean", "p95", "max", "sensor_p95")
 
 
 def richardson_error(fine: float, coarse: float, rate: float = RATE, ratio: float = RATIO) -> float:
@@ -103,7 +103,7 @@ def attach(fine: list[dict], coarse: list[dict], rate: float = RATE) -> list[dic
     for r in fine:
         c = by_name.get(r["region"])
         row = dict(r)
-        for s in STATS:
+        for s in (s for s in STATS if f"{s}_kPa" in r):
             err = richardson_error(r[f"{s}_kPa"], c[f"{s}_kPa"], rate) if c else float("nan")
             row[f"{s}_err_kPa"] = err
             row[f"{s}_err_mmHg"] = units.pa_to_mmhg(1e3 * err)

@@ -256,18 +256,22 @@ def _contact_measures(built) -> dict:
     }
 
 
-def contact_points_by_region(built) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(body region, pressure [Pa], deformed area [m²]) of every contact point in contact,
-    gathered on all ranks; the region is that of the closest body triangle."""
+def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
+    """(body region, pressure [Pa], deformed area [m²], sensor reading [Pa]) of every contact
+    point in contact, gathered on all ranks; the region is that of the closest body triangle,
+    the sensor reading :func:`output.sensor_pressure` with ``[output] sensor_diameter``."""
     st, c = built.contact.state, built.contact
     comm = built.model.geometry.mesh.comm
     p = c.pressure_values()
     a = cpressure.point_areas(st, c.area_stretch())
+    x = cpressure.positions(st)
     on = p > 0
-    faces = built.search_body.closest(cpressure.positions(st)[on]).face
-    local = (built.body.region[faces], p[on], a[on])
-    parts = comm.allgather(local)
-    return tuple(np.concatenate([q[k] for q in parts]) for k in range(3))
+    faces = built.search_body.closest(x[on]).face
+    parts = comm.allgather((built.body.region[faces], p, a, x, on))
+    region, p, a, x, on = (np.concatenate([q[k] for q in parts]) for k in range(5))
+    radius = 0.5 * built.scene.output.sensor_diameter
+    sensor = output.sensor_pressure(x[on], x, p * a, a, radius)
+    return region, p[on], a[on], sensor
 
 
 def element_warning(variant) -> str | None:
@@ -680,9 +684,13 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
 
 
 def _print_regions(say, regions: list[dict]) -> None:
-    say(f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6}  kPa   comfort (p95)")
+    say(
+        f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6} {'sensor':>6}  kPa"
+        "   comfort (p95)   (sensor: p95 of a sensor's reading, [output] sensor_diameter)"
+    )
     for r in regions:
         if r["contact_area_m2"] <= 0:
             continue
         say(f"  {r['region']:<12} {r['contact_area_m2'] * 1e4:7.0f}cm² {r['mean_kPa']:6.2f} "
-            f"{r['p95_kPa']:6.2f} {r['max_kPa']:6.2f}        {r['comfort']}")  # fmt: skip
+            f"{r['p95_kPa']:6.2f} {r['max_kPa']:6.2f} {r.get('sensor_p95_kPa', 0.0):6.2f}"
+            f"        {r['comfort']}")  # fmt: skip
