@@ -132,11 +132,13 @@ def test_sections_are_smooth_across_the_side_lines(level):
     import gmsh
 
     from fenics_garment.geometry.gmsh_utils import gmsh_session
-    from fenics_garment.geometry.mannequin import section_wire, torso_sections
+    from fenics_garment.geometry.mannequin import ring_wire, torso_sections
+    from fenics_garment.geometry.sections import resample_by_angle
 
     z, pts = torso_sections(measurements("88"))[level]
     with gmsh_session(name="wire") as g:
-        section_wire(g, pts, z)
+        p = resample_by_angle(pts, 24, centre=pts.mean(axis=0))
+        ring_wire(g, np.column_stack([p, np.full(24, z)]))
         g.model.occ.synchronize()
         (_, back), (_, front) = g.model.getEntities(1)
 

@@ -123,20 +123,32 @@ def add_loft(
 
     The halves meet at the lateral points (+x and −x), so an open loft yields two faces
     (back first, then front) sharing the side lines; returns the OCC entities made. The halves
-    are the two pieces of one periodic spline (:func:`section_wire`), so the surface is smooth
+    are the two pieces of one periodic spline (:func:`ring_wire`), so the surface is smooth
     across the side lines.
     """
-    wires = [section_wire(g, pts, z, n_pts) for z, pts in secs.values()]
+    from .sections import resample_by_angle
+
+    rings = []
+    for z, pts in secs.values():
+        p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
+        rings.append(np.column_stack([p, np.full(n_pts, z)]))
+    return loft_rings(g, rings, solid, max_degree)
+
+
+def loft_rings(g, rings: list[np.ndarray], solid: bool = True, max_degree: int = -1):
+    """OCC loft through closed 3-D rings ((n, 3) points each, n even, the same start and turning
+    sense on every ring), each wire made by :func:`ring_wire`. Returns the OCC entities made."""
+    wires = [ring_wire(g, ring) for ring in rings]
     return g.model.occ.addThruSections(
         wires, makeSolid=solid, makeRuled=False, maxDegree=max_degree
     )
 
 
-def section_wire(g, pts: np.ndarray, z: float, n_pts: int = 24) -> int:
-    """A closed horizontal section at height ``z``: the periodic cubic B-spline interpolating
-    ``n_pts`` points of the (x, y) curve ``pts`` resampled by angle (uniform knots), as two
-    clamped pieces meeting at the lateral points (+x, −x) — a back half (+x → +y → −x) and a
-    front half (−x → −y → +x); returns the wire.
+def ring_wire(g, ring: np.ndarray) -> int:
+    """A closed wire through the ring of points ``ring`` (n, 3), n even: the periodic cubic
+    B-spline interpolating them (uniform knots) as two clamped pieces meeting at points 0 and
+    n/2 — for a horizontal section resampled by angle, the lateral points +x and −x, so a back
+    half (+x → +y → −x) and a front half (−x → −y → +x). Returns the wire.
 
     The pieces are exact restrictions of one C² curve (:func:`periodic_halves`), so the section
     has one tangent and one curvature at the side lines. Two splines interpolating the halves
@@ -144,15 +156,12 @@ def section_wire(g, pts: np.ndarray, z: float, n_pts: int = 24) -> int:
     hoop tension T over a kink of angle θ carries a line force Tθ, and the pressure at the sides
     grew without limit as the garment mesh was refined (waist p95 +5–6 % per √2 level).
     """
-    from .sections import resample_by_angle
-
     occ = g.model.occ
-    p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
-    side = [occ.addPoint(*p[0], z), occ.addPoint(*p[len(p) // 2], z)]  # +x, −x: shared ends
+    ends = [occ.addPoint(*ring[0]), occ.addPoint(*ring[len(ring) // 2])]  # shared by the halves
     curves = []
-    for k, (ctrl, knots) in enumerate(periodic_halves(p)):
-        inner = [occ.addPoint(x, y, z) for x, y in ctrl[1:-1]]
-        tags = [side[k], *inner, side[1 - k]]
+    for k, (ctrl, knots) in enumerate(periodic_halves(ring)):
+        inner = [occ.addPoint(*c) for c in ctrl[1:-1]]
+        tags = [ends[k], *inner, ends[1 - k]]
         mult = [4] + [1] * (len(knots) - 2) + [4]
         curves.append(occ.addBSpline(tags, degree=3, knots=knots.tolist(), multiplicities=mult))
         occ.remove([(0, t) for t in inner])
@@ -160,7 +169,7 @@ def section_wire(g, pts: np.ndarray, z: float, n_pts: int = 24) -> int:
 
 
 def periodic_halves(p: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
-    """The periodic cubic B-spline through the closed polygon ``p`` (n, 2), node i at knot i,
+    """The periodic cubic B-spline through the closed polygon ``p`` (n, d), node i at knot i,
     split at knots 0 and n/2: per half its control points and distinct knots (clamped ends).
 
     The control points Q solve (Q_{i−1} + 4 Q_i + Q_{i+1}) / 6 = p_i (cyclic); each half is cut
