@@ -79,18 +79,18 @@ def row(r: dict) -> str:
             f"load {r['loadavg'][0]:.1f}")  # fmt: skip
 
 
-def refinement_table(data: dict) -> dict:
-    """p95 change per region [%] when the body mesh goes from BODY to BODY/2, for every pair of
-    completed runs that differ only in the body mesh (scene, surface, garment mesh, element,
-    dressing schedule)."""
+def refinement_table(data: dict, stat: str = "p95") -> dict:
+    """``stat`` (p95 or sensor_p95) change per region [%] when the body mesh goes from BODY to
+    BODY/2, for every pair of completed runs that differ only in the body mesh (scene, surface,
+    garment mesh, element, dressing schedule); the latest run of each kind."""
     out = {}
     ok = {_key(r): r for r in data["runs"] if r.get("status") == "ok" and r["completed"]}
     for key, b in ok.items():
         name, surface, h, body, element, schedule = key
         a = ok.get((name, surface, h, BODY, element, schedule))
-        if body != BODY / 2 or a is None:
+        if body != BODY / 2 or a is None or f"regions_{stat}_kPa" not in a:
             continue
-        pa, pb = a["regions_p95_kPa"], b["regions_p95_kPa"]
+        pa, pb = a[f"regions_{stat}_kPa"], b[f"regions_{stat}_kPa"]
         label = f"{name}/{surface}, garment {h * 1e3:.1f} mm {element or 'P1-P1'} {schedule}"
         out[label.strip()] = {
             k: 100.0 * (pb[k] / pa[k] - 1.0) for k in pa if k in pb and pa[k] > 0.02
@@ -131,10 +131,12 @@ def markdown(data: dict) -> str:
                      f"{r['newton_its']} | {r['failed_attempts']} | {np.median(lr):.1e} / "
                      f"{max(lr):.1e} | {r['contact_search_s']:.0f} / "
                      f"{r['dressing_s']:.0f} |")  # fmt: skip
-    ref = data.get("refinement_p95_change_percent", {})
-    if ref:
+    for stat in ("p95", "sensor_p95"):
+        ref = data.get(f"refinement_{stat}_change_percent", {})
+        if not ref:
+            continue
         regions = sorted({k for v in ref.values() for k in v})
-        lines += ["", "| p95 change, body 15 → 7.5 mm [%] | " + " | ".join(regions) + " |",
+        lines += ["", f"| {stat} change, body 15 → 7.5 mm [%] | " + " | ".join(regions) + " |",
                   "|---|" + "---|" * len(regions)]  # fmt: skip
         for case, v in ref.items():
             cells = [f"{v[k]:+.1f}" if k in v else "" for k in regions]
@@ -184,7 +186,8 @@ def main(argv: list[str]) -> int:
             for name in names:
                 for body in (BODY, BODY / 2):
                     run_one(data, name, surface, h_ref, body)
-    data["refinement_p95_change_percent"] = refinement_table(data)
+    for stat in ("p95", "sensor_p95"):
+        data[f"refinement_{stat}_change_percent"] = refinement_table(data, stat)
     _save(data)
     print(markdown(data))
     return 0
