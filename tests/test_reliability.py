@@ -7,6 +7,7 @@ The interruption is simulated in-process (an exception right after a checkpoint 
 
 import json
 import os
+import re
 import shutil
 import tempfile
 from dataclasses import replace
@@ -198,7 +199,7 @@ def test_garment_starting_too_deep_inside_the_body(tmp_path, capsys):
 def test_check_a_good_scene(tmp_path, capsys):
     assert cli.main(["check", _scene_file(tmp_path, small_tube())]) == 0
     out = capsys.readouterr().out
-    assert "ok" in out and "724 cells" in out and "initial penetration" in out
+    assert "ok" in out and re.search(r"garment \d+ cells", out) and "initial penetration" in out
 
 
 def test_zero_density_is_valid_and_weightless():
