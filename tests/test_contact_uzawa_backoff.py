@@ -50,6 +50,7 @@ def point(monkeypatch):
         state.lam.array[:] = np.maximum(state.lam.array - kappa * state.gap.array, 0.0)
 
     monkeypatch.setattr(uzawa, "max_penetration", lambda state: float(-state.gap.array[0]))
+    monkeypatch.setattr(uzawa, "persisting_penetration", lambda state, gap, last: float(-gap[0]))
     monkeypatch.setattr(uzawa, "update_multiplier", update)
     return _Point()
 
@@ -111,3 +112,17 @@ def test_a_failed_tenfold_raise_is_tried_again_smaller(point):
     assert al.recoveries[0] == "smaller raise"
     assert 10.0 * np.sqrt(10.0) in [pytest.approx(k) for k in al.kappa]
     assert point.lam.array[0] == pytest.approx(point.load, rel=1e-5)
+
+
+def test_a_point_that_has_just_touched_is_not_a_stall():
+    """The penalty is raised on the penetration of the points that penetrated in the last pass
+    too: one that has only now come into contact has no multiplier yet."""
+    from types import SimpleNamespace
+
+    from fenics_garment._stack import MPI
+
+    state = SimpleNamespace(mesh=SimpleNamespace(comm=MPI.COMM_SELF))
+    last = np.array([-1e-5, 1e-4, 2e-6])
+    gap = np.array([-2e-6, -8e-6, 1e-6])
+    assert uzawa.persisting_penetration(state, gap, last) == pytest.approx(2e-6)
+    assert uzawa.persisting_penetration(state, gap, None) == pytest.approx(8e-6)

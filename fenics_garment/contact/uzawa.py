@@ -126,6 +126,7 @@ def augmented_lagrangian(
     """
     report = UzawaReport()
     previous = None
+    last_gap = None  # the gap of the last converged pass
     raises = 0
     last = None
     for _ in range(max_updates + 1):
@@ -168,7 +169,12 @@ def augmented_lagrangian(
         gap = state.gap.x.array.copy()
         if unknown is not None:
             last = (unknown.x.array.copy(), state.lam.x.array.copy(), kappa, gap, previous)
-        stalled = len(report.penetration) > 1 and pen > SUFFICIENT_DECREASE * report.penetration[-2]
+        stalled = (
+            len(report.penetration) > 1
+            and persisting_penetration(state, gap, last_gap)
+            > SUFFICIENT_DECREASE * report.penetration[-2]
+        )
+        last_gap = gap
         if stiffen is not None and stalled and raises < MAX_STIFFEN:
             raises += 1
             kappa *= STIFFEN_FACTOR
@@ -177,6 +183,18 @@ def augmented_lagrangian(
         update_multiplier(state, kappa, previous)
         previous = gap
     return report
+
+
+def persisting_penetration(state: ContactState, gap: np.ndarray, last: np.ndarray | None) -> float:
+    """max(−g) over the points that penetrated in the last pass too (all ranks) [m].
+
+    The penalty is raised only when these stall: a point that has just come into contact has no
+    multiplier yet, and the next update gives it one at the same κ. On the cotton gilet at
+    24.7 mm the largest penetration went 6.7 → 5.5 µm at one armhole point with λ = 0 there, and
+    the ×10 raise this triggered was more than Newton could take."""
+    old = np.ones(len(gap), dtype=bool) if last is None else last < 0.0
+    local = float(-gap[old].min()) if old.any() else -np.inf
+    return state.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
 def _put_back(state: ContactState, unknown, stiffen, q, lam, kappa: float) -> None:
