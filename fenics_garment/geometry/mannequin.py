@@ -125,12 +125,22 @@ def add_loft(
     """
     from .sections import resample_by_angle
 
-    wires = []
+    rings = []
     for z, pts in secs.values():
-        c = pts.mean(axis=0)
-        p = resample_by_angle(pts, n_pts, centre=c)
-        tags = [g.model.occ.addPoint(x, y, z) for x, y in p]
-        half = n_pts // 2
+        p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
+        rings.append(np.column_stack([p, np.full(n_pts, z)]))
+    return loft_rings(g, rings, solid, max_degree)
+
+
+def loft_rings(g, rings: list[np.ndarray], solid: bool = True, max_degree: int = -1):
+    """OCC loft through closed 3-D rings ((n, 3) points each, n even, the same start and turning
+    sense on every ring); each wire is two splines meeting at points 0 and n/2 (see
+    :func:`add_loft`). Sections need not be horizontal: the human's arms are lofted through
+    rings normal to their own axis (:mod:`.human`). Returns the OCC entities made."""
+    wires = []
+    for ring in rings:
+        tags = [g.model.occ.addPoint(x, y, z) for x, y, z in ring]
+        half = len(tags) // 2
         back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
         front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
         wires.append(g.model.occ.addWire([back, front]))
@@ -238,7 +248,7 @@ ARM_LEVELS = ("wrist", "forearm", "elbow", "upper_arm")
 #: :mod:`.measurements` (the ASTM D5585 rows transcribed there are torso girths only; no arm
 #: girth table was at hand), in the range of an adult woman's wrist (~15–16 cm), forearm, elbow
 #: and biceps (~26–28 cm) tape girths. Pass measured values to :func:`make_arm` for a wearer.
-ARM_GIRTHS = {"wrist": 0.155, "forearm": 0.215, "elbow": 0.235, "upper_arm": 0.27}
+ARM_GIRTHS = {k: getattr(Measurements(), f"{k}_girth") for k in ARM_LEVELS}  # 15.5 … 27 cm
 #: Distance of each level above the wrist [m] (our estimate: forearm 24 cm, the upper-arm girth
 #: taken 12 cm above the elbow).
 ARM_HEIGHTS = {"wrist": 0.0, "forearm": 0.12, "elbow": 0.24, "upper_arm": 0.36}
