@@ -66,6 +66,10 @@ NECK_INTO_HEAD = 0.06
 #: 0.055, 0.065, 2.4; mannequin.torso_sections), whose shoulder ends in a thin edge where the
 #: arm's root has to fit (our estimates, not data)
 HUMAN_SHOULDER = (0.012, 0.065, 0.070, 3.0)
+#: the arm loft's degree cap across its sections (mannequin.loft_rings): with OCC's default the
+#: loft through the 8 unevenly spaced sections overshoots 0.2 m forward of the shoulder
+#: (measured at 2 cm elements: y from −0.235 m; with 3, −0.134 m, the hand's front edge)
+ARM_LOFT_DEGREE = 3
 #: points per arm section of the loft
 ARM_RING_POINTS = 24
 
@@ -287,7 +291,7 @@ def _fuse_human(g, m: Measurements, pose: Pose) -> None:
     for side in (+1, -1):
         parts += add_loft(g, leg_sections(m, side))
         rings = arm_rings(m, pose, side)
-        parts += loft_rings(g, list(rings.values()))
+        parts += loft_rings(g, list(rings.values()), max_degree=ARM_LOFT_DEGREE)
     hd = head(m)
     ball = occ.addSphere(*hd.centre, 1.0)
     occ.dilate([(3, ball)], *hd.centre, *hd.axes)
