@@ -66,10 +66,12 @@ NECK_INTO_HEAD = 0.06
 #: 0.055, 0.065, 2.4; mannequin.torso_sections), whose shoulder ends in a thin edge where the
 #: arm's root has to fit (our estimates, not data)
 HUMAN_SHOULDER = (0.012, 0.065, 0.070, 3.0)
-#: the arm loft's degree cap across its sections (mannequin.loft_rings): with OCC's default the
-#: loft through the 8 unevenly spaced sections overshoots 0.2 m forward of the shoulder
-#: (measured at 2 cm elements: y from −0.235 m; with 3, −0.134 m, the hand's front edge)
+#: the arm lofts' degree cap across their sections (mannequin.loft_rings): with OCC's default a
+#: loft through the 8 unevenly spaced sections of a whole arm overshot 0.2 m forward of the
+#: shoulder (measured at 2 cm elements: y from −0.235 m; with 3, −0.134 m, the hand's edge)
 ARM_LOFT_DEGREE = 3
+#: the elbow's stubs reach this far [m] past the mitre plane's furthest point
+ELBOW_STUB = 0.005
 #: points per arm section of the loft
 ARM_RING_POINTS = 24
 
@@ -94,30 +96,43 @@ class Pose:
 
 @dataclass(frozen=True)
 class ArmSection:
-    """One section of an arm: ``s`` along the axis from the shoulder joint [m], tape ``girth``
-    [m], ``aspect`` = depth (front–back) / width, superellipse ``exponent``."""
+    """One section of an arm: ``s`` along the axis from the shoulder joint [m] on the ``upper``
+    arm's or the ``fore`` arm's straight line, tape ``girth`` [m], ``aspect`` = depth
+    (front–back) / width, superellipse ``exponent``."""
 
     name: str
+    segment: str
     s: float
     girth: float
     aspect: float = 1.0
     exponent: float = 2.0
 
 
-def arm_sections(m: Measurements) -> list[ArmSection]:
-    """The arm's sections, root to finger tips. The hand's: our estimates of an adult woman's
-    flat hand (palm 19 cm round, 3.5 : 1 across; the fingers 17 cm; the tips 11 cm)."""
+def arm_sections(m: Measurements, pose: Pose) -> list[ArmSection]:
+    """The arm's sections, root to finger tips, in two lofts that cross at the elbow: the upper
+    arm's runs a stub past the elbow along its own line, the forearm's starts a stub before it,
+    both with the elbow's round section, so their union is a mitre joint in the bisecting plane
+    (one loft through the bend spread it: the arm's sharpest bend, where :mod:`.limbs` puts the
+    elbow, came out 6.5 cm above the elbow section, and guide sections near the elbow made the
+    loft overshoot). The hand's sections: our estimates of an adult woman's flat hand (palm
+    19 cm round, 3.5 : 1 across; the fingers 17 cm; the tips 11 cm)."""
     lu, lf, lh = m.upper_arm_length, m.forearm_length, m.hand_length
     w = lu + lf
+    r_e = m.elbow_girth / (2.0 * np.pi)
+    stub = r_e * np.tan(0.5 * np.radians(pose.elbow_flexion)) + ELBOW_STUB
+    ge = m.elbow_girth
     return [
-        ArmSection("root", -0.01, 0.85 * m.upper_arm_girth),
-        ArmSection("upper_arm", 0.5 * lu, m.upper_arm_girth),
-        ArmSection("elbow", lu, m.elbow_girth),
-        ArmSection("forearm", lu + 0.5 * lf, m.forearm_girth, 1.1),
-        ArmSection("wrist", w, m.wrist_girth, 1.25),
-        ArmSection("palm", w + 0.4 * lh, 0.19, 3.5, 2.4),
-        ArmSection("fingers", w + 0.75 * lh, 0.17, 3.5, 2.4),
-        ArmSection("tips", w + 0.97 * lh, 0.11, 2.5, 2.2),
+        ArmSection("root", "upper", -0.01, 0.85 * m.upper_arm_girth),
+        ArmSection("upper_arm", "upper", 0.5 * lu, m.upper_arm_girth),
+        ArmSection("elbow", "upper", lu, ge),
+        ArmSection("elbow_past", "upper", lu + stub, ge),
+        ArmSection("elbow_before", "fore", lu - stub, ge),
+        ArmSection("elbow_fore", "fore", lu, ge),
+        ArmSection("forearm", "fore", lu + 0.5 * lf, m.forearm_girth, 1.1),
+        ArmSection("wrist", "fore", w, m.wrist_girth, 1.25),
+        ArmSection("palm", "fore", w + 0.4 * lh, 0.19, 3.5, 2.4),
+        ArmSection("fingers", "fore", w + 0.75 * lh, 0.17, 3.5, 2.4),
+        ArmSection("tips", "fore", w + 0.97 * lh, 0.11, 2.5, 2.2),
     ]
 
 
@@ -130,14 +145,12 @@ class ArmAxis:
     upper: Array
     fore: Array
 
-    def at(self, s: float) -> tuple[Array, Array]:
-        """Point and unit tangent at ``s`` along the axis (the bisector at the elbow)."""
-        lu = float(np.linalg.norm(self.elbow - self.joint))
-        if abs(s - lu) < 1e-9:
-            t = self.upper + self.fore
-            return self.elbow, t / np.linalg.norm(t)
-        if s < lu:
+    def at(self, s: float, segment: str) -> tuple[Array, Array]:
+        """Point and unit tangent at ``s`` from the joint along the ``upper`` arm's line or
+        the ``fore`` arm's (each continued past the elbow)."""
+        if segment == "upper":
             return self.joint + s * self.upper, self.upper
+        lu = float(np.linalg.norm(self.elbow - self.joint))
         return self.elbow + (s - lu) * self.fore, self.fore
 
 
@@ -155,11 +168,11 @@ def arm_axis(m: Measurements, pose: Pose, side: int) -> ArmAxis:
 
 def arm_rings(m: Measurements, pose: Pose, side: int) -> dict[str, Array]:
     """3-D rings of one arm's sections (name -> (ARM_RING_POINTS, 3)), each in the plane
-    normal to the axis, its depth along the horizontal front–back direction projected."""
+    normal to its line, its depth along the horizontal front–back direction projected."""
     axis = arm_axis(m, pose, side)
     out = {}
-    for a in arm_sections(m):
-        c, t = axis.at(a.s)
+    for a in arm_sections(m, pose):
+        c, t = axis.at(a.s, a.segment)
         ey = np.array([0.0, 1.0, 0.0]) - t[1] * t
         ey /= np.linalg.norm(ey)
         ew = np.cross(ey, t)
@@ -168,6 +181,14 @@ def arm_rings(m: Measurements, pose: Pose, side: int) -> dict[str, Array]:
         p = sec.resample_by_angle(pts, ARM_RING_POINTS, centre=np.zeros(2))
         out[a.name] = c + p[:, :1] * ew + p[:, 1:] * ey
     return out
+
+
+def arm_lofts(m: Measurements, pose: Pose, side: int) -> list[list[Array]]:
+    """The rings of the upper arm's loft and of the forearm's (with the hand)."""
+    rings = arm_rings(m, pose, side)
+    segs = [a.segment for a in arm_sections(m, pose)]
+    return [[r for r, sg in zip(rings.values(), segs, strict=True) if sg == k]
+            for k in ("upper", "fore")]  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -290,8 +311,8 @@ def _fuse_human(g, m: Measurements, pose: Pose) -> None:
     parts = add_loft(g, human_torso_sections(m))
     for side in (+1, -1):
         parts += add_loft(g, leg_sections(m, side))
-        rings = arm_rings(m, pose, side)
-        parts += loft_rings(g, list(rings.values()), max_degree=ARM_LOFT_DEGREE)
+        for rings in arm_lofts(m, pose, side):
+            parts += loft_rings(g, rings, max_degree=ARM_LOFT_DEGREE)
     hd = head(m)
     ball = occ.addSphere(*hd.centre, 1.0)
     occ.dilate([(3, ball)], *hd.centre, *hd.axes)
