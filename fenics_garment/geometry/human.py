@@ -40,7 +40,7 @@ from .mannequin import (
     _surface_arrays,
     add_loft,
     leg_sections,
-    loft_rings,
+    ring_wire,
     torso_sections,
 )
 from .measurements import Measurements, measurements
@@ -70,8 +70,9 @@ HUMAN_SHOULDER = (0.012, 0.065, 0.070, 3.0)
 #: loft through the 8 unevenly spaced sections of a whole arm overshot 0.2 m forward of the
 #: shoulder (measured at 2 cm elements: y from −0.235 m; with 3, −0.134 m, the hand's edge)
 ARM_LOFT_DEGREE = 3
-#: the elbow's stubs reach this far [m] past the mitre plane's furthest point
-ELBOW_STUB = 0.005
+#: the arm's root section may reach this far [m] out of the torso's sections (linear between
+#: them: the loft bulges a little beyond that stand-in) before the measurements are refused
+ROOT_SLACK = 0.005
 #: points per arm section of the loft
 ARM_RING_POINTS = 24
 
@@ -109,31 +110,35 @@ class ArmSection:
 
 
 def arm_sections(m: Measurements, pose: Pose) -> list[ArmSection]:
-    """The arm's sections, root to finger tips, in two lofts that cross at the elbow: the upper
-    arm's runs a stub past the elbow along its own line, the forearm's starts a stub before it,
-    both with the elbow's round section, so their union is a mitre joint in the bisecting plane
-    (one loft through the bend spread it: the arm's sharpest bend, where :mod:`.limbs` puts the
-    elbow, came out 6.5 cm above the elbow section, and guide sections near the elbow made the
-    loft overshoot). The hand's sections: our estimates of an adult woman's flat hand (palm
-    19 cm round, 3.5 : 1 across; the fingers 17 cm; the tips 11 cm)."""
+    """The arm's sections, root to finger tips, in two lofts that share the elbow's section: an
+    ellipse in the plane bisecting the bend (the cut of a round arm by it), its perimeter the
+    elbow girth. The union is a mitre joint: the bend sits at the elbow (one loft through the
+    bend spread it, and :mod:`.limbs` found the sharpest bend 6.5 cm above the elbow section;
+    two lofts crossing each other left millimetre-long edges and 2° slivers at the elbow).
+    Guide sections half-way between elbow, forearm and wrist (girths and aspects the means of
+    their neighbours) space the forearm's sections as evenly as the hand's: the loft is
+    parametrised by section number, and with 12 cm gaps before 4–7 cm ones it bulged 8 % below
+    the elbow. The hand's sections: our estimates of an adult woman's flat hand (palm 19 cm round,
+    3.5 : 1 across; the fingers 17 cm; the tips 11 cm)."""
     lu, lf, lh = m.upper_arm_length, m.forearm_length, m.hand_length
     w = lu + lf
-    r_e = m.elbow_girth / (2.0 * np.pi)
-    stub = r_e * np.tan(0.5 * np.radians(pose.elbow_flexion)) + ELBOW_STUB
-    ge = m.elbow_girth
+    k = 1.0 / np.cos(0.5 * np.radians(pose.elbow_flexion))
     return [
         ArmSection("root", "upper", -0.01, 0.85 * m.upper_arm_girth),
         ArmSection("upper_arm", "upper", 0.5 * lu, m.upper_arm_girth),
-        ArmSection("elbow", "upper", lu, ge),
-        ArmSection("elbow_past", "upper", lu + stub, ge),
-        ArmSection("elbow_before", "fore", lu - stub, ge),
-        ArmSection("elbow_fore", "fore", lu, ge),
+        ArmSection("elbow", "mitre", lu, m.elbow_girth, k),
+        ArmSection("forearm_upper", "fore", lu + 0.25 * lf, _mean(m.elbow_girth, m.forearm_girth), 1.05),
         ArmSection("forearm", "fore", lu + 0.5 * lf, m.forearm_girth, 1.1),
+        ArmSection("forearm_lower", "fore", lu + 0.75 * lf, _mean(m.forearm_girth, m.wrist_girth), 1.18),
         ArmSection("wrist", "fore", w, m.wrist_girth, 1.25),
         ArmSection("palm", "fore", w + 0.4 * lh, 0.19, 3.5, 2.4),
         ArmSection("fingers", "fore", w + 0.75 * lh, 0.17, 3.5, 2.4),
         ArmSection("tips", "fore", w + 0.97 * lh, 0.11, 2.5, 2.2),
     ]
+
+
+def _mean(a: float, b: float) -> float:
+    return 0.5 * (a + b)
 
 
 @dataclass(frozen=True)
@@ -146,10 +151,13 @@ class ArmAxis:
     fore: Array
 
     def at(self, s: float, segment: str) -> tuple[Array, Array]:
-        """Point and unit tangent at ``s`` from the joint along the ``upper`` arm's line or
-        the ``fore`` arm's (each continued past the elbow)."""
+        """Point and unit normal of the section plane at ``s`` from the joint on the ``upper``
+        arm's line, the ``fore`` arm's, or the elbow's ``mitre`` (the bisecting plane)."""
         if segment == "upper":
             return self.joint + s * self.upper, self.upper
+        if segment == "mitre":
+            t = self.upper + self.fore
+            return self.elbow, t / np.linalg.norm(t)
         lu = float(np.linalg.norm(self.elbow - self.joint))
         return self.elbow + (s - lu) * self.fore, self.fore
 
@@ -168,7 +176,8 @@ def arm_axis(m: Measurements, pose: Pose, side: int) -> ArmAxis:
 
 def arm_rings(m: Measurements, pose: Pose, side: int) -> dict[str, Array]:
     """3-D rings of one arm's sections (name -> (ARM_RING_POINTS, 3)), each in the plane
-    normal to its line, its depth along the horizontal front–back direction projected."""
+    normal to its line, its depth along the horizontal front–back direction projected (at the
+    elbow's mitre the width is along the bend's axis, the same direction for both lines)."""
     axis = arm_axis(m, pose, side)
     out = {}
     for a in arm_sections(m, pose):
@@ -184,11 +193,26 @@ def arm_rings(m: Measurements, pose: Pose, side: int) -> dict[str, Array]:
 
 
 def arm_lofts(m: Measurements, pose: Pose, side: int) -> list[list[Array]]:
-    """The rings of the upper arm's loft and of the forearm's (with the hand)."""
+    """The rings of the upper arm's loft and of the forearm's (with the hand); the elbow's
+    ring ends the first and starts the second."""
     rings = arm_rings(m, pose, side)
-    segs = [a.segment for a in arm_sections(m, pose)]
-    return [[r for r, sg in zip(rings.values(), segs, strict=True) if sg == k]
-            for k in ("upper", "fore")]  # fmt: skip
+    segs = {a.name: a.segment for a in arm_sections(m, pose)}
+    upper = [r for n, r in rings.items() if segs[n] in ("upper", "mitre")]
+    fore = [r for n, r in rings.items() if segs[n] in ("mitre", "fore")]
+    return [upper, fore]
+
+
+def _add_arm(g, m: Measurements, pose: Pose, side: int) -> list[tuple[int, int]]:
+    """The two lofts of an arm, through one shared OCC wire at the elbow."""
+    upper, fore = arm_lofts(m, pose, side)
+    wires = [ring_wire(g, r) for r in upper]
+    elbow = wires[-1]
+    wires_fore = [elbow] + [ring_wire(g, r) for r in fore[1:]]
+    out = []
+    for ws in (wires, wires_fore):
+        out += g.model.occ.addThruSections(ws, makeSolid=True, makeRuled=False,
+                                           maxDegree=ARM_LOFT_DEGREE)  # fmt: skip
+    return out
 
 
 @dataclass(frozen=True)
@@ -255,11 +279,15 @@ def check_human(m: Measurements, pose: Pose) -> None:
     """Refuse measurements the construction cannot build (module doc), before gmsh runs."""
     torso = human_torso_sections(m)
     rings = arm_rings(m, pose, +1)
-    if not _inside_torso(torso, rings["root"]).all():
+    root = rings["root"]
+    c = root.mean(axis=0)
+    r = np.linalg.norm(root - c, axis=1)[:, None]
+    if not _inside_torso(torso, c + (root - c) * np.maximum(1.0 - ROOT_SLACK / r, 0.0)).all():
         raise GeometryError(
             f"the arm root does not fit inside the shoulder: upper_arm_girth "
             f"{m.upper_arm_girth:.3g} m is too large for shoulder_width {m.shoulder_width:.3g} m "
-            "and the chest (give a smaller upper-arm girth or a wider shoulder)"
+            f"and the chest at {pose.abduction:g}° abduction (give a smaller upper-arm girth, a "
+            "wider shoulder or more abduction)"
         )
     for name in ("forearm", "wrist", "palm", "fingers", "tips"):
         if _inside_torso(torso, rings[name]).any():
@@ -311,8 +339,7 @@ def _fuse_human(g, m: Measurements, pose: Pose) -> None:
     parts = add_loft(g, human_torso_sections(m))
     for side in (+1, -1):
         parts += add_loft(g, leg_sections(m, side))
-        for rings in arm_lofts(m, pose, side):
-            parts += loft_rings(g, rings, max_degree=ARM_LOFT_DEGREE)
+        parts += _add_arm(g, m, pose, side)
     hd = head(m)
     ball = occ.addSphere(*hd.centre, 1.0)
     occ.dilate([(3, ball)], *hd.centre, *hd.axes)

@@ -137,16 +137,19 @@ def loft_rings(g, rings: list[np.ndarray], solid: bool = True, max_degree: int =
     sense on every ring); each wire is two splines meeting at points 0 and n/2 (see
     :func:`add_loft`). Sections need not be horizontal: the human's arms are lofted through
     rings normal to their own axis (:mod:`.human`). Returns the OCC entities made."""
-    wires = []
-    for ring in rings:
-        tags = [g.model.occ.addPoint(x, y, z) for x, y, z in ring]
-        half = len(tags) // 2
-        back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
-        front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
-        wires.append(g.model.occ.addWire([back, front]))
+    wires = [ring_wire(g, ring) for ring in rings]
     return g.model.occ.addThruSections(
         wires, makeSolid=solid, makeRuled=False, maxDegree=max_degree
     )
+
+
+def ring_wire(g, ring: np.ndarray) -> int:
+    """An OCC wire through a closed ring: two splines, points 0 … n/2 and n/2 … n, 0."""
+    tags = [g.model.occ.addPoint(x, y, z) for x, y, z in ring]
+    half = len(tags) // 2
+    back = g.model.occ.addSpline(tags[: half + 1])  # +x -> +y (back) -> -x
+    front = g.model.occ.addSpline(tags[half:] + tags[:1])  # -x -> -y (front) -> +x
+    return g.model.occ.addWire([back, front])
 
 
 def make_mannequin(
