@@ -26,6 +26,7 @@ on the hips, a head smaller than the neck) raise a one-line :class:`~.errors.Geo
 from __future__ import annotations
 
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import numpy.typing as npt
@@ -127,9 +128,13 @@ def arm_sections(m: Measurements, pose: Pose) -> list[ArmSection]:
         ArmSection("root", "upper", -0.01, 0.85 * m.upper_arm_girth),
         ArmSection("upper_arm", "upper", 0.5 * lu, m.upper_arm_girth),
         ArmSection("elbow", "mitre", lu, m.elbow_girth, k),
-        ArmSection("forearm_upper", "fore", lu + 0.25 * lf, _mean(m.elbow_girth, m.forearm_girth), 1.05),
+        ArmSection(
+            "forearm_upper", "fore", lu + 0.25 * lf, _mean(m.elbow_girth, m.forearm_girth), 1.05
+        ),
         ArmSection("forearm", "fore", lu + 0.5 * lf, m.forearm_girth, 1.1),
-        ArmSection("forearm_lower", "fore", lu + 0.75 * lf, _mean(m.forearm_girth, m.wrist_girth), 1.18),
+        ArmSection(
+            "forearm_lower", "fore", lu + 0.75 * lf, _mean(m.forearm_girth, m.wrist_girth), 1.18
+        ),
         ArmSection("wrist", "fore", w, m.wrist_girth, 1.25),
         ArmSection("palm", "fore", w + 0.4 * lh, 0.19, 3.5, 2.4),
         ArmSection("fingers", "fore", w + 0.75 * lh, 0.17, 3.5, 2.4),
@@ -258,7 +263,7 @@ def _torso_polygon(secs: dict[str, tuple[float, Array]], z: float) -> Array | No
     """The torso section at ``z``, linear between the loft's sections (a close stand-in for
     the loft), or None outside them."""
     levels = list(secs.values())
-    for (z0, p0), (z1, p1) in zip(levels, levels[1:], strict=False):
+    for (z0, p0), (z1, p1) in pairwise(levels):
         if z0 <= z <= z1:
             w = (z - z0) / (z1 - z0)
             a = sec.resample_by_angle(p0, 180, centre=p0.mean(axis=0))

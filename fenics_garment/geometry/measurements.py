@@ -18,8 +18,8 @@ Where the numbers come from:
   bust 88 ↔ hip 96 (bust + 8 cm) is **our assumption**, not a table value.
 * **Everything else** (shoulder width, limb girths, arm lengths, head girth, the landmark
   heights as fractions of stature) is **our own round-number proportion for an adult woman**,
-  not from a standard or a survey; limb girths scale with the hip, shoulder width with the bust. For a real wearer pass
-  measured values as overrides: every field can be overridden.
+  not from a standard or a survey; limb girths scale with the hip, shoulder width with the bust.
+  For a real wearer pass measured values as overrides: every field can be overridden.
 """
 
 from __future__ import annotations

@@ -424,9 +424,11 @@ def _check(s: Scene) -> None:
     _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
     kinds = GARMENT_BODY.get(g.kind, ("mannequin", "scan"))
     ok = b.kind in kinds or (g.kind == "sleeve" and b.human)
-    needs = " or ".join(kinds) + (" (or a mannequin with human = true)" if g.kind == "sleeve" else "")
+    needs = " or ".join(kinds)
     an = "an" if needs[0] in "aeiou" else "a"
     msg = f"a {g.kind} needs {an} {needs} body (body.kind = {b.kind!r})"
+    if g.kind == "sleeve":
+        msg += ", or a mannequin with human = true"
     _require(ok, src, "garment.kind", msg)
     _one_of(g.side, SIDES, src, "garment.side")
     if g.kind == "stocking":
