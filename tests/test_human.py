@@ -272,6 +272,24 @@ def test_human_scene_loads_and_a_sleeve_may_use_its_arm(tmp_path):
     assert config.load(path).garment.side == "right"
 
 
+def test_human_sleeve_scene_builds_its_sleeve_on_the_arm():
+    """demos/human_sleeve.toml: the sleeve is cut from the human's own left arm (coarse body)."""
+    from dataclasses import replace
+
+    from fenics_garment._stack import MPI
+    from fenics_garment.scene import config
+    from fenics_garment.scene.build import make_garment
+
+    scene = config.load(DEMOS / "human_sleeve.toml")
+    body = make_human(M, MeshSizes(coarse=0.03, fine=0.03))
+    scene = replace(scene, garment=replace(scene.garment, geometry="straight", mesh_size=0.03))
+    g = make_garment(scene, body, MPI.COMM_SELF)
+    assert g.kind == "sleeve" and g.frame is body.limbs["arm_left"]
+    wrist = g.level("wrist")
+    assert wrist.body_girth == pytest.approx(M.wrist_girth, rel=0.015)
+    assert wrist.garment_girth == pytest.approx((1 - 0.07) * wrist.body_girth, rel=1e-3)
+
+
 def test_preflight_refuses_an_arm_too_thick_for_the_shoulder(tmp_path):
     from fenics_garment.scene import config
     from fenics_garment.scene.preflight import PreflightError, mannequin_limits
