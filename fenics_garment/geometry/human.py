@@ -12,15 +12,20 @@ sleeve follows the arm as on a scan. Construction (metres; +z up, facing −y, l
   (x = ±shoulder_width / 2), hangs ``Pose.abduction`` out from the vertical in the frontal plane
   for ``upper_arm_length`` to the elbow, bends forward by ``Pose.elbow_flexion`` and runs
   ``forearm_length`` to the wrist and ``hand_length`` to the finger tips. Sections normal to the
-  axis (bisecting it at the elbow), each scaled to its girth: a root section inside the torso,
-  the upper arm half-way between J and the elbow (ISO 8559-1), elbow, forearm half-way, wrist,
-  and three sections of a flat hand (palms turned to the thighs).
+  axis, each scaled to its girth: a root section inside the torso, the upper arm half-way
+  between J and the elbow (ISO 8559-1), the elbow (in the plane bisecting the bend: upper arm
+  and forearm are two lofts sharing it, a mitre joint, :func:`arm_sections`), the forearm
+  half-way with guide sections half-way on either side, the wrist, and three sections of a
+  flat hand (palms turned to the thighs).
 * **Head**: an ellipsoid whose horizontal girth at its widest is ``head_girth``, its crown at
   the stature, breadth / length ``HEAD_ASPECT``, height ``2 HEAD_SEMI_HEIGHT`` × stature.
 
-The arms meet the torso in a crease (no fillet). There are no feet (the legs end 3 cm below the
-ankle level, as the dress form's). Bad measurements (an arm too thick for the shoulder, hands
-on the hips, a head smaller than the neck) raise a one-line :class:`~.errors.GeometryError`.
+The arms meet the torso in a crease and the elbow is a mitre (OCC could not fillet either:
+"Could not compute fillet" at 5 mm to 2 cm radii). There are no feet (the legs end 3 cm below
+the ankle level, as the dress form's). Bad measurements (an arm too thick for the shoulder or
+too little abduction, hands on the hips, a head smaller than the neck) raise a one-line
+:class:`~.errors.GeometryError` before gmsh runs; gmsh's own failures become one too, and
+gmsh runs under :data:`~.gmsh_utils.GMSH_TIME_LIMIT`.
 """
 
 from __future__ import annotations
