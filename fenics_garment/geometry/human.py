@@ -20,12 +20,13 @@ sleeve follows the arm as on a scan. Construction (metres; +z up, facing −y, l
 * **Head**: an ellipsoid whose horizontal girth at its widest is ``head_girth``, its crown at
   the stature, breadth / length ``HEAD_ASPECT``, height ``2 HEAD_SEMI_HEIGHT`` × stature.
 
-The arms meet the torso in a crease and the elbow is a mitre (OCC could not fillet either:
-"Could not compute fillet" at 5 mm to 2 cm radii). There are no feet (the legs end 3 cm below
-the ankle level, as the dress form's). Bad measurements (an arm too thick for the shoulder or
-too little abduction, hands on the hips, a head smaller than the neck) raise a one-line
-:class:`~.errors.GeometryError` before gmsh runs; gmsh's own failures become one too, and
-gmsh runs under :data:`~.gmsh_utils.GMSH_TIME_LIMIT`.
+The arms meet the torso in a crease and the elbow is a mitre: gmsh/OCC's fillet failed on both
+("Could not compute fillet": on the crossing elbow lofts of an earlier version at 5 mm – 2 cm,
+on the curves of the arm-root seam picked near the chest wall at 3 mm and 1 cm). There are no
+feet (the legs end 3 cm below the ankle level, as the dress form's). Bad measurements (an arm
+too thick for the shoulder or too little abduction, hands on the hips, a head smaller than the
+neck) raise a one-line :class:`~.errors.GeometryError` before gmsh runs; gmsh's own failures
+become one too, and gmsh runs under :data:`~.gmsh_utils.GMSH_TIME_LIMIT`.
 """
 
 from __future__ import annotations
