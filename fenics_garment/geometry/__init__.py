@@ -1,4 +1,4 @@
-"""Bodies and garments as meshes: parametric mannequin, scan import, garments, regions.
+"""Bodies and garments as meshes: parametric mannequin and human, scan import, garments, regions.
 
 Conventions: metres, +z up, the body faces −y (its left side is +x). Import the submodules
 directly; nothing here needs DOLFINx until ``to_dolfinx`` is called.
@@ -6,6 +6,7 @@ directly; nothing here needs DOLFINx until ``to_dolfinx`` is called.
 
 from .body import BodySurface
 from .errors import GeometryError, MissingRegion, ScanError
+from .human import Pose, make_human
 from .mannequin import MeshSizes, make_mannequin
 from .measurements import Measurements, measurements
 
@@ -15,7 +16,9 @@ __all__ = [
     "Measurements",
     "MeshSizes",
     "MissingRegion",
+    "Pose",
     "ScanError",
+    "make_human",
     "make_mannequin",
     "measurements",
 ]

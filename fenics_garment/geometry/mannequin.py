@@ -137,7 +137,9 @@ def add_loft(
 
 def loft_rings(g, rings: list[np.ndarray], solid: bool = True, max_degree: int = -1):
     """OCC loft through closed 3-D rings ((n, 3) points each, n even, the same start and turning
-    sense on every ring), each wire made by :func:`ring_wire`. Returns the OCC entities made."""
+    sense on every ring), each wire made by :func:`ring_wire`. Sections need not be horizontal:
+    the human's arms are lofted through rings normal to their own axis (:mod:`.human`). Returns
+    the OCC entities made."""
     wires = [ring_wire(g, ring) for ring in rings]
     return g.model.occ.addThruSections(
         wires, makeSolid=solid, makeRuled=False, maxDegree=max_degree
@@ -289,7 +291,7 @@ ARM_LEVELS = ("wrist", "forearm", "elbow", "upper_arm")
 #: :mod:`.measurements` (the ASTM D5585 rows transcribed there are torso girths only; no arm
 #: girth table was at hand), in the range of an adult woman's wrist (~15–16 cm), forearm, elbow
 #: and biceps (~26–28 cm) tape girths. Pass measured values to :func:`make_arm` for a wearer.
-ARM_GIRTHS = {"wrist": 0.155, "forearm": 0.215, "elbow": 0.235, "upper_arm": 0.27}
+ARM_GIRTHS = {k: getattr(Measurements(), f"{k}_girth") for k in ARM_LEVELS}  # 15.5 … 27 cm
 #: Distance of each level above the wrist [m] (our estimate: forearm 24 cm, the upper-arm girth
 #: taken 12 cm above the elbow).
 ARM_HEIGHTS = {"wrist": 0.0, "forearm": 0.12, "elbow": 0.24, "upper_arm": 0.36}

@@ -16,10 +16,10 @@ Where the numbers come from:
   interpolated in the ASTM table at that bust girth.
 * **Hip girth** of an EN size: EN 13402-3 labels bottoms by hip girth in 4 cm steps; the pairing
   bust 88 ↔ hip 96 (bust + 8 cm) is **our assumption**, not a table value.
-* **Everything else** (shoulder width, limb girths, the landmark heights as fractions of
-  stature) is **our own round-number proportion for an adult woman**, not from a standard or a
-  survey; limb girths scale with the hip, shoulder width with the bust. For a real wearer pass
-  measured values as overrides: every field can be overridden.
+* **Everything else** (shoulder width, limb girths, arm lengths, head girth, the landmark
+  heights as fractions of stature) is **our own round-number proportion for an adult woman**,
+  not from a standard or a survey; limb girths scale with the hip, shoulder width with the bust.
+  For a real wearer pass measured values as overrides: every field can be overridden.
 """
 
 from __future__ import annotations
@@ -62,6 +62,21 @@ class Measurements:
     knee_girth: float = 0.37
     calf_girth: float = 0.35
     ankle_girth: float = 0.22
+    # Arms and head, for the human mannequin (geometry.human). ISO 8559-1 definitions: upper-arm
+    # girth half-way between acromion and elbow, elbow girth over the olecranon, wrist girth
+    # over the styloid processes, head girth the largest horizontal girth over the brow ridges
+    # and the back of the head; arm lengths along the arm (acromion to radiale, radiale to
+    # stylion), hand length from the wrist crease to the tip of the middle finger. Values: our
+    # round numbers for an adult woman (the arm girths are those of the separate arm,
+    # mannequin.ARM_GIRTHS; no survey table was at hand), not from a standard or a survey.
+    upper_arm_girth: float = 0.27
+    elbow_girth: float = 0.235
+    forearm_girth: float = 0.215
+    wrist_girth: float = 0.155
+    head_girth: float = 0.55
+    upper_arm_length: float = 0.31
+    forearm_length: float = 0.24
+    hand_length: float = 0.18
     # Heights of the levels as fractions of stature (illustrative proportions, see module doc).
     neck_height: float = 0.875
     neck_base_height: float = 0.845
@@ -171,7 +186,9 @@ def measurements(size: str = "88", figure: str = "curvy", **overrides: float) ->
         "knee_girth": base.knee_girth * kh,
         "calf_girth": base.calf_girth * kh,
         "ankle_girth": base.ankle_girth * kh,
-    }
+        **{f"{k}_girth": getattr(base, f"{k}_girth") * kh
+           for k in ("upper_arm", "elbow", "forearm", "wrist")},
+    }  # fmt: skip
     unknown = set(overrides) - {f.name for f in fields(Measurements)}
     if unknown:
         raise TypeError(f"unknown measurement(s): {sorted(unknown)}")

@@ -23,9 +23,10 @@ import numpy.typing as npt
 
 from . import orientation as ori
 from . import surface as srf
-from .anatomy import analyse
+from .anatomy import Anatomy, analyse
 from .body import BodySurface, finish_body
 from .errors import ScanError
+from .measurements import Measurements
 from .scan_read import read_polygons
 
 IArray = npt.NDArray[np.int64]
@@ -158,12 +159,22 @@ def load_scan(
     report["girths"] = dict(anat.girths)
     report["limbs"] = {n: dict(lb.marks) for n, lb in anat.limbs.items()}
     report["seconds"] = {"read": t1 - t0, "clean": t2 - t1, "anatomy": t3 - t2}
-    body = finish_body(v, t, anat.landmarks, dict(anat.sections), part=anat.part)
+    return segmented_body(v, t, anat), report
+
+
+def segmented_body(
+    vertices: Array, triangles: IArray, anat: Anatomy, measurements: Measurements | None = None
+) -> BodySurface:
+    """A :class:`BodySurface` from a segmented surface: the anatomy's landmarks, torso tape
+    sections, parts (regions on their part), landmark points, arm cuts and limbs (scans and the
+    human mannequin, :mod:`.human`, alike)."""
+    body = finish_body(vertices, triangles, anat.landmarks, dict(anat.sections), measurements,
+                       part=anat.part)  # fmt: skip
     body.points = dict(anat.points)
     body.arm_cut = dict(anat.arm_cut)
     body.limbs = dict(anat.limbs)
     body.limb_problems = dict(anat.limb_problems)
-    return body, report
+    return body
 
 
 def remesh_surface(vertices: Array, triangles: npt.NDArray[np.int64], h: float):

@@ -53,8 +53,13 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
 
             m = measurements(b.size, **b.measurements)
             sizes = MeshSizes(coarse=b.mesh_size, fine=b.mesh_size)
-            z = tuple(b.z_range) if b.z_range else None
-            body = make_mannequin(m, sizes, z_range=z, legs=b.legs)
+            if b.human:  # the whole body, segmented as a scan (z_range and legs not used)
+                from fenics_garment.geometry.human import make_human
+
+                body = make_human(m, sizes, landmarks=dict(b.landmarks) or None)
+            else:
+                z = tuple(b.z_range) if b.z_range else None
+                body = make_mannequin(m, sizes, z_range=z, legs=b.legs)
     return comm.bcast(body, root=0)
 
 

@@ -60,12 +60,22 @@ class BodyConfig:
     sections (:func:`~fenics_garment.geometry.mannequin.make_arm`); ``measurements`` then takes
     ``wrist_girth``, ``forearm_girth``, ``elbow_girth``, ``upper_arm_girth`` [m], and
     ``z_range`` is not used (the arm has its own frame, wrist at z = 0).
+
+    ``human = true`` (a mannequin only): the mannequin with two arms in an A-pose, a neck and a
+    head, from the same measurements (:func:`~fenics_garment.geometry.human.make_human`;
+    ``measurements`` also takes ``upper_arm_girth``, ``elbow_girth``, ``forearm_girth``,
+    ``wrist_girth``, ``head_girth``, ``upper_arm_length``, ``forearm_length``, ``hand_length``),
+    segmented as a scan is: a gilet's armholes go round its arm roots, a sleeve follows its left
+    or right arm, a stocking its leg. The whole body is built (``legs`` and ``z_range`` are not
+    used: the segmentation needs the legs, and the contact search crops the body anyway);
+    ``landmarks`` replaces detected heights as for a scan.
     """
 
     kind: str = "mannequin"
     size: str = "88"  # mannequin size code (bust girth in cm)
     measurements: dict[str, float] = field(default_factory=dict)  # overrides [m]
     legs: bool = False
+    human: bool = False  # mannequin: arms (A-pose) and head, segmented like a scan (above)
     z_range: list[float] = field(default_factory=lambda: [0.75, 1.55])  # crop [m]; [] = none
     mesh_size: float = 0.02  # body triangle size [m]
     file: str = ""  # scan file (kind = "scan"), relative to the scene file
@@ -74,7 +84,7 @@ class BodyConfig:
     up: str = ""  # scan: the file's up axis "x" | "-x" | "y" | "-y" | "z" | "-z" ("" = detect)
     max_hole_edges: int = 40  # scan: holes up to this many boundary edges are filled
     remesh: bool = False  # scan: remesh with gmsh at mesh_size (false: keep its triangles)
-    landmarks: dict[str, float] = field(default_factory=dict)  # scan: heights [m] to override
+    landmarks: dict[str, float] = field(default_factory=dict)  # scan, human: heights [m]
     # "rigid", or "soft": a Winkler layer of soft tissue of tissue_depth [m] over a rigid core,
     # with the seed paper's Table 1 body modulus and Poisson ratio (contact.terms.SoftTissue);
     # the contact stiffness is then the tissue's, not a numerical penalty
@@ -386,7 +396,6 @@ def _check(s: Scene) -> None:
             _require(v > 0, src, f"body.measurements.{k}", f"must be positive, got {v}")
     if b.kind == "scan":
         _require(bool(b.file), src, "body.file", "a scan body needs a file")
-        from fenics_garment.geometry.anatomy import LANDMARKS
         from fenics_garment.geometry.orientation import ROTATIONS, UNITS
 
         _require(b.units in ("", *UNITS), src, "body.units", f"must be one of {', '.join(UNITS)}")
@@ -394,6 +403,11 @@ def _check(s: Scene) -> None:
         _require(b.scale >= 0, src, "body.scale", f"must be positive (m per unit), got {b.scale}")
         _require(not (b.scale and b.units), src, "body.scale", "give units or scale, not both")
         _require(b.max_hole_edges >= 0, src, "body.max_hole_edges", "must be 0 or more")
+    _require(not b.human or b.kind == "mannequin", src, "body.human",
+             f"only a mannequin can have arms and a head (body.kind = {b.kind!r})")  # fmt: skip
+    if b.kind == "scan" or b.human:
+        from fenics_garment.geometry.anatomy import LANDMARKS
+
         for k, v in b.landmarks.items():
             if k not in LANDMARKS:
                 raise _unknown(k, list(LANDMARKS), "body.landmarks", src)
@@ -410,14 +424,16 @@ def _check(s: Scene) -> None:
         _require(v > 0, src, f"body.{key}", f"must be positive, got {v}")
     _one_of(g.kind, GARMENT_KINDS, src, "garment.kind")
     kinds = GARMENT_BODY.get(g.kind, ("mannequin", "scan"))
-    ok = b.kind in kinds
+    ok = b.kind in kinds or (g.kind == "sleeve" and b.human)
     needs = " or ".join(kinds)
     an = "an" if needs[0] in "aeiou" else "a"
     msg = f"a {g.kind} needs {an} {needs} body (body.kind = {b.kind!r})"
+    if g.kind == "sleeve":
+        msg += ", or a mannequin with human = true"
     _require(ok, src, "garment.kind", msg)
     _one_of(g.side, SIDES, src, "garment.side")
     if g.kind == "stocking":
-        _require(b.kind != "mannequin" or b.legs, src, "body.legs",
+        _require(b.kind != "mannequin" or b.legs or b.human, src, "body.legs",
                  "a stocking on a mannequin needs legs = true")  # fmt: skip
     if isinstance(g.ease, dict) and g.kind in EASE_LEVELS:
         for k in g.ease:

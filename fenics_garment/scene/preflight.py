@@ -200,6 +200,15 @@ def mannequin_limits(scene) -> None:
         m = measurements(b.size, **b.measurements)
     except (ValueError, TypeError) as err:
         raise PreflightError(f"{src}: [body.measurements] {err}") from None
+    if b.human:  # the whole body is built (no crop); the arms and head must fit
+        from fenics_garment.geometry.errors import GeometryError
+        from fenics_garment.geometry.human import Pose, check_human
+
+        try:
+            check_human(m, Pose())
+        except GeometryError as err:
+            raise PreflightError(f"{src}: [body.measurements] {err}") from None
+        return
     needed = NEEDED_LEVELS.get(scene.garment.kind)
     if b.z_range and needed:
         lo, hi = (m.height(level) for level in needed)
