@@ -25,7 +25,7 @@ SCENE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
 
 def _scene(**solver) -> config.Scene:
     s = config.load(SCENE)
-    # the faceted body and the straight-sided garment, whose dressing needs the 5 Newton
+    # the faceted body and the straight-sided garment, whose dressing needs the > 5 Newton
     # iterations the forced cut relies on (the shipped smooth body and curved garment need 3:
     # test_shipped_tube_obeys_laplace; the faceted body under a curved garment needs 22, its
     # edge and centre points crossing the body's facet edges). The spring to the previous step:
@@ -63,9 +63,11 @@ def _shared_tmp(comm) -> Path:
 
 @pytest.fixture(scope="module")
 def tube_run():
-    # the whole shrink in one step with at most 4 Newton iterations (it needs 5): a cut is forced
+    # the whole shrink in one step with at most 5 Newton iterations (it needs more): a cut is
+    # forced. With 4 the halved steps stall at 0.19 mm, where a contact point of the smooth-
+    # sectioned tube crosses a facet edge of the faceted body
     comm = MPI.COMM_WORLD
-    return run(_scene(snes_max_it=4), _shared_tmp(comm), quiet=True, first_step=1.0)
+    return run(_scene(snes_max_it=5), _shared_tmp(comm), quiet=True, first_step=1.0)
 
 
 def test_dressing_cuts_the_step_and_completes(tube_run):
@@ -155,7 +157,7 @@ def test_outputs_read_back(tube_run):
     rows = list(csv.DictReader((folder / "pressure_regions.csv").open()))
     assert float(rows[0]["mean_kPa"]) == pytest.approx(tube_run.regions[0]["mean_kPa"], rel=1e-5)
     assert config.load(folder / "scene_used.toml") == replace(
-        _scene(snes_max_it=4), source=str(folder / "scene_used.toml")
+        _scene(snes_max_it=5), source=str(folder / "scene_used.toml")
     )
     assert (folder / "dressing.bp").is_dir()
     assert (folder / "pressure_garment.png").stat().st_size > 10_000
