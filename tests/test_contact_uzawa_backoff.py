@@ -55,9 +55,9 @@ def point(monkeypatch):
     return _Point()
 
 
-def test_a_failed_raise_goes_back_and_converges_at_the_last_penalty(point):
+def _failing_above(point: _Point, largest: float, max_updates: int) -> uzawa.UzawaReport:
+    """The loop from κ = 1 (raised as it stalls) with Newton "failing" above ``largest``."""
     kappa = _Constant(1.0)
-    largest = 500.0  # Newton "fails" above this penalty (the third raise, κ = 1000)
 
     def solve():
         if kappa.value > largest:
@@ -65,9 +65,14 @@ def test_a_failed_raise_goes_back_and_converges_at_the_last_penalty(point):
         point.solve(kappa.value)
         return 3, 2
 
-    al = uzawa.augmented_lagrangian(
-        point, 1.0, solve, tol=1e-6, max_updates=40, stiffen=kappa, unknown=point.gap
+    return uzawa.augmented_lagrangian(
+        point, 1.0, solve, tol=1e-6, max_updates=max_updates, stiffen=kappa, unknown=point.gap
     )
+
+
+def test_a_failed_raise_goes_back_and_converges_at_the_last_penalty(point):
+    largest = 500.0  # Newton "fails" above this penalty (the third raise, κ = 1000)
+    al = _failing_above(point, largest, max_updates=40)
     assert al.converged
     assert max(al.kappa) > largest  # a raise was tried and failed ...
     assert al.kappa[-1] <= largest  # ... and the loop went on at the penalty that converged
@@ -96,18 +101,8 @@ def test_a_failure_at_a_converged_penalty_is_tried_once_more_then_ends_the_loop(
 
 
 def test_a_failed_tenfold_raise_is_tried_again_smaller(point):
-    kappa = _Constant(1.0)
-    largest = 50.0  # the ×10 raise to 100 fails, the ×√10 one to 31.6 does not
-
-    def solve():
-        if kappa.value > largest:
-            return 3, -3
-        point.solve(kappa.value)
-        return 3, 2
-
-    al = uzawa.augmented_lagrangian(
-        point, 1.0, solve, tol=1e-6, max_updates=80, stiffen=kappa, unknown=point.gap
-    )
+    # the ×10 raise to 100 fails, the ×√10 one to 31.6 does not
+    al = _failing_above(point, 50.0, max_updates=80)
     assert al.converged
     assert al.recoveries[0] == "smaller raise"
     assert 10.0 * np.sqrt(10.0) in [pytest.approx(k) for k in al.kappa]
