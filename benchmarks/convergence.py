@@ -26,7 +26,9 @@ dressing path's part of a frictional answer: the same meshes with twice the grow
 with friction on while the body grows. ``anchor-start`` (``[dressing] spring_anchor``) anchors
 the dressing spring at the garment as placed instead of the previous solve, ``release-R`` takes
 the factor R per release solve (``release_ratio``) and ``spring-X`` the spring c₀ = X E h / L²
-(``regularisation``); any of these combine with ``+``.
+(``regularisation``); any of these combine with ``+``. ``body-X`` meshes the body with
+triangles of X m instead of the scene's (e.g. ``body-0.0075``: the garment levels on a body finer
+than the finest garment, so the garment's part of the error is measured alone).
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the

@@ -98,6 +98,8 @@ def child(spec: dict) -> dict:
             s = replace(s, dressing=replace(s.dressing, release_ratio=float(part[8:])))
         if part.startswith("spring-"):  # spring-X: c₀ = X E h / L² instead of the scene's
             s = replace(s, dressing=replace(s.dressing, regularisation=float(part[7:])))
+        if part.startswith("body-"):  # body-X: body triangles of X m instead of the scene's
+            spec["body_mesh_size"] = float(part[len("body-") :])
     if "body_surface" in spec:  # benchmarks/smooth_body.py
         phys = replace(phys, body_surface=spec["body_surface"])
     if "body_mesh_size" in spec:

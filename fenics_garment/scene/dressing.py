@@ -163,6 +163,12 @@ def _absolute_tolerance(built, solver: NonlinearSolver) -> float:
     return solver.raise_atol(rtol * f_ref)
 
 
+def _max_pressure(contact, comm: MPI.Comm) -> float:
+    """The largest contact pressure over all ranks [Pa]."""
+    p = contact.pressure_values()
+    return comm.allreduce(float(np.abs(p).max()) if len(p) else 0.0, op=MPI.MAX)
+
+
 def _max_pressure_change(contact, before: np.ndarray, comm: MPI.Comm) -> float:
     after = contact.pressure_values()
     d = float(np.abs(after - before).max()) if len(after) else 0.0
@@ -399,8 +405,9 @@ def _release(
     same on every mesh); a failed solve is retried, every second time with a sub-step half-way
     (in log c) from the last c that converged, after which the schedule goes on from the c that
     failed; a solve that needs no Newton iteration and leaves the spring unstretched (anchored
-    at the previous step: nothing moves, so it carries no force) is followed by c = 0 at once.
-    Otherwise (adaptive):
+    at the previous step: nothing moves, so it carries no force) is followed by c = 0 at once,
+    and so is one after which the spring's largest traction is negligible
+    (:data:`SPRING_NEGLIGIBLE` of the largest contact pressure). Otherwise (adaptive):
 
     The spring pulls towards the previous step, so each solve is an exact equilibrium up to the
     spring traction c |u − u_prev|; while the garment still moves (a loose skirt finding its
@@ -482,6 +489,7 @@ def _release_loop(
         rep.final_regularisation = c
         rep.spring_traction = c * moved
         rep.regularisation_effect = _max_pressure_change(contact, before, comm)
+        negligible = c * moved <= SPRING_NEGLIGIBLE * _max_pressure(contact, comm)
         contact.state.accept_step()
         reg.accept_step(model.q)
         if on_step:
@@ -493,6 +501,8 @@ def _release_loop(
                 pr.c = pr.c_target
             elif its == 0 and moved == 0.0:  # nothing moved and the spring carries no force
                 pr.c = 0.0  # (anchored at the previous step): the rest is a no-op
+            elif negligible:  # the spring's largest traction is a negligible load: drop it
+                pr.c = 0.0
             else:
                 pr.c = c * ratio if c * ratio >= C_ZERO * reg.c0 else 0.0
             if pr.c_target >= 0 and pr.c <= pr.c_target:
@@ -512,6 +522,18 @@ def _release_loop(
 
 
 #: Release schedule of :func:`_release`.
+#: With the fixed schedule the spring goes to 0 at once after an accepted solve in which its
+#: largest traction c·max|u − u_a| was at most this fraction of the largest contact pressure:
+#: the solves that would weaken it further (c₀/4ᵏ down to c₀·C_ZERO) start near Newton's floor
+#: and grind there with line-searched steps. Cotton gilet at 35 mm (2 ranks): the old schedule
+#: took 14 solves and 87 Newton iterations, its last four (c = 6 … 0.1 Pa/m) starting within
+#: 30× the absolute tolerance and ending linearly (ratio 0.59, 0.25); jumping to 0 after
+#: c = 98 Pa/m (spring ≈ 7e-4 of the largest pressure) takes 9 solves, 59 iterations, ends
+#: quadratically (9.9e-5 → 1.3e-7 N), and gives the same region mean, p95 and sensor p95 to
+#: 4 digits and the same contact force to 7 (35.66511 N) as the old schedule and as a jump after
+#: c = 6.1 Pa/m; the largest pointwise pressure change of the jump is 0.7 % (reported as
+#: ``regularisation_effect``).
+SPRING_NEGLIGIBLE = 1e-3
 #: A spring not released to 0 whose last weakening changed the pressure by less than this is
 #: reported as negligible (else the run warns).
 RELEASE_TOLERANCE = 0.01
