@@ -82,7 +82,7 @@ def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     """The fixed schedule (the default): with one schedule step (first_step = 1) each cut halves
     the way to the schedule point s = 0 (s₀/2, s₀/4, …, then 0 itself, never past it), and the
     spring (anchored at the previous step) goes through c₀·rᵏ (r = release_ratio) until nothing
-    moves, then 0."""
+    moves or its traction is negligible, then 0."""
     rep = tube_run.report
     c0 = tube_run.built.regularisation.c0
     assert tube_run.summary["dressing_schedule"] == "fixed"
@@ -91,7 +91,7 @@ def test_fixed_schedule_keeps_its_points_after_a_cut(tube_run):
     assert len(grow) >= 2 and np.allclose(grow, halvings, rtol=0, atol=1e-12 * rep.shrink0), grow
     release = [st for st in rep.steps if st.stage == "release"]
     cs = [st.regularisation for st in release]
-    assert cs[-1] == 0.0 and release[-2].iterations == 0  # nothing moved: straight to c = 0
+    assert cs[-1] == 0.0 and len(cs) >= 2
     _assert_release_schedule(cs, c0)
 
 
