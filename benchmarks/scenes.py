@@ -153,6 +153,14 @@ def _speed_variant(spec: dict) -> None:
         shell.ShellContact.solver_hooks = lambda self: {"pre_residual": [self.refresh]}
 
 
+def release_settings() -> dict:
+    """The constants of the release of the dressing spring (``scene.dressing``)."""
+    from fenics_garment.scene import dressing
+
+    return {"line_search": dressing.RELEASE_LINE_SEARCH,
+            "spring_negligible": dressing.SPRING_NEGLIGIBLE}  # fmt: skip
+
+
 def _record(res, spec: dict, comm) -> dict:
     sm = res.summary
     tm = sm["time_s"]
@@ -202,6 +210,8 @@ def _record(res, spec: dict, comm) -> dict:
         "body_mesh_size": spec.get("body_mesh_size"),
         "per_turn": spec.get("per_turn"),
         "schedule": sm.get("dressing_schedule"),
+        # the release as the code ran it (benchmarks/sweep.py reuses runs of the same release)
+        "release": release_settings(),
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve
         "final_ratios": [(x["stage"], x["iterations"], x.get("final_ratios")) for x in steps],
         "failed_attempts": len(sm["dressing"]["failed_attempts"]),

@@ -62,12 +62,16 @@ def above_tolerance(r: dict) -> bool:
 
 
 def _known(stem: str) -> list[dict]:
-    """Completed earlier runs of ``stem`` on the current schedule (convergence and sweep)."""
+    """Completed earlier runs of ``stem`` on the current schedule and release (convergence and
+    sweep; a record from before the release was recorded is run again)."""
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
     want = convergence.schedule_of(stem, "default")
+    release = scene_bench.release_settings()
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
-            if r.get("status") == "ok" and r.get("schedule") == want]  # fmt: skip
+            if r.get("status") == "ok" and r.get("schedule") == want
+            and r.get("release") == release
+            and r.get("variant", "default") == "default"]  # fmt: skip
 
 
 def sweep(stem: str, say) -> list[dict]:
