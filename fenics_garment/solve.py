@@ -527,8 +527,10 @@ class LoadStepper:
         current = float(model.load_factor.value)
         lam = current if (self.history or from_current) else 0.0
         if from_current and lam > target + 1e-14:
-            raise ValueError(f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; "
-                             "load stepping only increases λ (use path following to go back)")
+            raise ValueError(
+                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; "
+                "load stepping only increases λ (use path following to go back)"
+            )
         dlam = (target - lam) / self.steps
         q_prev = q.x.array.copy()
         lam_prev = lam
