@@ -463,14 +463,16 @@ def tail_tensions(scene: ContactCase) -> tuple[float, float]:
     λ = ℓ/L between two points on its centre line, Green strain E = (λ² − 1)/2, force
     T = λ · E h w · E (first Piola–Kirchhoff force per reference width × width).
     """
-    from fenics_garment.shell.model import evaluate_at_points
+    from fenics_garment.points import PointEvaluator
 
     tail, rho, th = scene.extra["tail"], scene.extra["rho"], scene.extra["theta"]
     s = np.array(
         [0.3 * tail, 0.7 * tail, 2 * tail + rho * th - 0.7 * tail, 2 * tail + rho * th - 0.3 * tail]
     )
     X = _strip_path(s, np.zeros(4), rho, th, tail).T
-    x = X + evaluate_at_points(scene.model.displacement(), X)
+    if "tail_probe" not in scene.extra:  # located once, evaluated at every step
+        scene.extra["tail_probe"] = PointEvaluator(scene.model.geometry.mesh, X)
+    x = X + scene.extra["tail_probe"](scene.model.displacement())
     out = []
     for i, j in ((0, 1), (2, 3)):
         lam = np.linalg.norm(x[j] - x[i]) / np.linalg.norm(X[j] - X[i])
