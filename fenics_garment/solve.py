@@ -511,13 +511,26 @@ class LoadStepper:
         elif kind == "tangent":
             self.solver.stale_newton_step()
 
-    def run(self, target: float = 1.0) -> list[StepRecord]:
+    def run(self, target: float = 1.0, *, from_current: bool = False) -> list[StepRecord]:
+        """Step λ up to ``target``; returns the history of accepted steps.
+
+        Starts from λ = 0 on this stepper's first run and from where it stopped on later runs.
+        ``from_current=True`` starts from the model's current load factor and state instead —
+        to continue after path following (:mod:`fenics_garment.path`), which leaves the model
+        at a converged (q, λ) that this stepper has not seen.
+        """
         solver = self.solver
         model = solver.model
         q = model.q
         kind = self._predictor_kind()
         rtol = solver.problem.solver.getTolerances()[0]
-        lam = float(model.load_factor.value) if self.history else 0.0
+        current = float(model.load_factor.value)
+        lam = current if (self.history or from_current) else 0.0
+        if from_current and lam > target + 1e-14:
+            raise ValueError(
+                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; "
+                "load stepping only increases λ (use path following to go back)"
+            )
         dlam = (target - lam) / self.steps
         q_prev = q.x.array.copy()
         lam_prev = lam

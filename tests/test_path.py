@@ -21,7 +21,7 @@ import pytest
 
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.path import ArcLength, DisplacementControl, DofProbe, newtonal_path
-from fenics_garment.solve import NonlinearSolver
+from fenics_garment.solve import LoadStepper, NonlinearSolver
 
 K = 0.5
 P_LIMIT = 2 / (3 * math.sqrt(3))  # ±, at u₁ = 1 ∓ 1/√3
@@ -125,6 +125,27 @@ def test_snes_newtonal_traces_the_same_path(truss):
     assert lam.min() == pytest.approx(-P_LIMIT, rel=1e-2)
     assert np.any(np.diff(b) < 0)
     assert u2_of(u1()) == pytest.approx(u2(), abs=1e-8)
+
+
+def test_load_stepping_continues_after_path_following(truss):
+    """Arc length to λ ≈ 0.1, then load control to 0.3 from there (``from_current``): the
+    steps start at the path's λ, and the end state is the analytic one on the first branch,
+    r(u₁) = 0.3 with u₁ < 1 − 1/√3 (before the snap-through)."""
+    model, solver = truss
+    u1 = _probe(model, 0)
+    path = ArcLength(solver)
+    path.run(0.02, lambda_max=0.1)
+    lam0 = float(model.load_factor.value)
+    assert 0.1 <= lam0 < 0.15 and r(u1()) == pytest.approx(lam0, abs=1e-8)
+    stepper = LoadStepper(solver, steps=4, predictor="none")
+    history = stepper.run(0.3, from_current=True)
+    assert history[0].load_factor == pytest.approx(lam0 + (0.3 - lam0) / 4, rel=1e-12)
+    roots = np.roots([1.0, -3.0, 2.0, -0.3])  # r(u₁) = u₁³ − 3u₁² + 2u₁ = 0.3
+    first = min(x.real for x in roots if abs(x.imag) < 1e-12 and x.real > 0)
+    assert first < 1 - 1 / math.sqrt(3)
+    assert u1() == pytest.approx(first, abs=1e-8) and history[-1].load_factor == 0.3
+    with pytest.raises(ValueError, match="beyond the target"):
+        LoadStepper(solver).run(0.2, from_current=True)
 
 
 # Sze et al. 2004 §3.6, hinged roof, P2B-P2B quarter model n×n, against the first limit point of

@@ -34,6 +34,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.shell.geometry import (
     cell_normal,
@@ -75,9 +77,32 @@ def rotate(theta: ufl.core.expr.Expr, v: ufl.core.expr.Expr) -> ufl.core.expr.Ex
     return v + c1 * ufl.cross(theta, v) + c2 * (ufl.dot(theta, v) * theta - a2 * v)
 
 
+def warp_constant(mesh: dolfinx.mesh.Mesh, direction) -> dolfinx.fem.Constant:
+    """A uniform warp direction as a ``fem.Constant`` (data of the compiled forms, not code)."""
+    c = dolfinx.fem.Constant(mesh, np.zeros(3, dtype=dolfinx.default_scalar_type))
+    c.value[:] = _checked_direction(direction)
+    return c
+
+
+def _checked_direction(direction) -> np.ndarray:
+    try:
+        w = np.asarray(direction, dtype=np.float64).reshape(3)
+    except (TypeError, ValueError):
+        raise ValueError(f"warp direction must be 3 numbers, got {direction!r}") from None
+    if not np.all(np.isfinite(w)) or np.linalg.norm(w) == 0.0:
+        raise ValueError(f"warp direction must be a finite nonzero vector, got {tuple(w)}")
+    return w
+
+
 @dataclass(frozen=True)
 class ShellGeometry:
-    """What the shell needs to know about its reference surface, computed from the mesh."""
+    """What the shell needs to know about its reference surface, computed from the mesh.
+
+    The warp is *data* of the forms: a uniform direction given as three numbers becomes a
+    ``fem.Constant`` (:meth:`set_warp` changes it in place), a field is a ``fem.Function``; so
+    a new warp direction reuses the compiled forms (no JIT; a literal vector would be folded
+    into the kernels and recompile them, 65–140 s cold for the shell's forms).
+    """
 
     mesh: dolfinx.mesh.Mesh
     orientation: dolfinx.fem.Function  # DG0, ±1
@@ -93,7 +118,8 @@ class ShellGeometry:
         outward=None,
         director_degree: int = 2,
     ) -> ShellGeometry:
-        """Orient the cells, average the director, and set the warp direction field."""
+        """Orient the cells, average the director, and set the warp direction (three numbers:
+        a ``fem.Constant``; or a ``fem.Function``/UFL vector field, used as given)."""
         if mesh.topology.dim != 2 or mesh.geometry.dim != 3:
             raise ValueError(
                 f"a shell needs a surface mesh in 3D (tdim 2, gdim 3); got tdim "
@@ -101,10 +127,21 @@ class ShellGeometry:
             )
         s = cell_orientation(mesh, outward)
         d0 = nodal_director(mesh, s, director_degree)
-        w = warp if isinstance(warp, ufl.core.expr.Expr | dolfinx.fem.Function) else (
-            ufl.as_vector([float(c) for c in warp])
-        )  # fmt: skip
+        w = warp if isinstance(warp, ufl.core.expr.Expr) else warp_constant(mesh, warp)
         return cls(mesh=mesh, orientation=s, director=d0, warp=w)
+
+    def set_warp(self, direction) -> None:
+        """Change a uniform warp direction in place: the next assembly uses it, no recompile.
+
+        Only for a warp made from three numbers (a ``fem.Constant``); a warp field is changed
+        through its own Function's values.
+        """
+        if not isinstance(self.warp, dolfinx.fem.Constant):
+            raise ValueError(
+                "set_warp needs a uniform warp (made from three numbers); this geometry's warp "
+                f"is a {type(self.warp).__name__}: change its values instead"
+            )
+        self.warp.value[:] = _checked_direction(direction)
 
     @property
     def normal(self) -> ufl.core.expr.Expr:

@@ -28,6 +28,7 @@ import numpy as np
 
 from fenics_garment._stack import dolfinx, ufl
 from fenics_garment.materials import Fabric, Isotropic
+from fenics_garment.points import PointEvaluator
 from fenics_garment.shell import energy as terms
 from fenics_garment.shell.kinematics import (
     ShellGeometry,
@@ -157,6 +158,7 @@ class ShellModel:
     _energy: list = field(default_factory=list, repr=False)
     _point: list = field(default_factory=list, repr=False)  # (vertex point, force, follower)
     discretisation: Discretisation | None = field(default=None, repr=False, compare=False)
+    _disp_spaces: tuple | None = field(default=None, init=False, repr=False, compare=False)
 
     def __post_init__(self) -> None:
         mesh = self.geometry.mesh
@@ -386,10 +388,17 @@ class ShellModel:
 
     # -- post-processing ------------------------------------------------------------------------
     def displacement(self) -> dolfinx.fem.Function:
-        """The displacement interpolated into vector P2 (for output and point values)."""
-        V = dolfinx.fem.functionspace(self.geometry.mesh, ("Lagrange", 2, (3,)))
+        """The displacement interpolated into vector P2 (for output and point values): a new
+        Function each call, on spaces built at the first call (the P2 space, the collapsed
+        displacement space of ``q`` and its dof map)."""
+        if self._disp_spaces is None:
+            V = dolfinx.fem.functionspace(self.geometry.mesh, ("Lagrange", 2, (3,)))
+            U, dofs = self.Q.sub(0).collapse()
+            self._disp_spaces = (V, dolfinx.fem.Function(U), np.asarray(dofs))
+        V, u, dofs = self._disp_spaces
+        u.x.array[:] = self.q.x.array[dofs]
         out = dolfinx.fem.Function(V, name="displacement")
-        out.interpolate(self.q.sub(0).collapse())
+        out.interpolate(u)
         return out
 
     def energy_value(self, form: ufl.Form) -> float:
@@ -400,24 +409,8 @@ class ShellModel:
 def evaluate_at_points(f: dolfinx.fem.Function, points: np.ndarray) -> np.ndarray:
     """Values of ``f`` at ``points`` (n, 3), identical on every rank (owner evaluates, allreduce).
 
-    Points must lie on the surface (within 1e-6 of a cell).
+    Points must lie on the surface (within 1e-6 of a cell). It locates the points anew on each
+    call: for repeated evaluation at the same points build a
+    :class:`~fenics_garment.points.PointEvaluator` once.
     """
-    mesh = f.function_space.mesh
-    points = np.atleast_2d(np.asarray(points, dtype=np.float64))
-    comm = mesh.comm
-    query = points if comm.rank == 0 else np.zeros((0, 3))
-    own = dolfinx.geometry.determine_point_ownership(mesh, query, 1e-6)
-    cells = np.asarray(own.dest_cells, dtype=np.int32)
-    pts = np.asarray(own.dest_points, dtype=np.float64).reshape(-1, 3)
-    vs = int(np.prod(f.ufl_shape)) if f.ufl_shape else 1
-    out = np.zeros((points.shape[0], vs))
-    found = np.zeros(points.shape[0])
-    if len(cells):
-        idx = np.argmin(np.linalg.norm(points[None, :, :] - pts[:, None, :], axis=2), axis=1)
-        out[idx] = f.eval(pts, cells).reshape(len(cells), vs)
-        found[idx] = 1.0
-    out = comm.allreduce(out)
-    found = comm.allreduce(found)
-    if np.any(found == 0):
-        raise ValueError(f"points not found on the mesh: {points[found == 0]}")
-    return out / found[:, None]
+    return PointEvaluator(f.function_space.mesh, points)(f)

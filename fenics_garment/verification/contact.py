@@ -336,25 +336,30 @@ def capstan_strip(
     R: float = 0.1,
     tail: float = 0.05,
     width: float = 0.02,
-    n: tuple[int, int] = (80, 2),
+    n: tuple[int, int] | None = None,
     E: float = 1.0e6,
     thickness: float = 1.0e-3,
     kappa_hat: float = 10.0,
     options: dict | None = None,
 ) -> ContactCase:
-    """A shell strip (ν = 0) wrapped on a rigid cylinder by θ = π/2, with straight tails.
+    """A shell strip (ν = 0) wrapped on a rigid cylinder by an angle θ ∈ (0, 3π/2], with
+    straight tails.
 
-    End A (tail along y, at y = −tail) is clamped; end B (tail along −x) has its rotations fixed
-    and is pulled along its tail, u_x = −δ, u_y = 0 (``extra["delta"]``, a Constant). The friction
-    coefficient is ``contact.friction.mu`` (a Constant: set it to 0 to pre-tension the strip).
-    The reference value is the capstan ratio e^{μθ} of the tail tensions at slip.
+    End A (tail along y, at y = −tail) is clamped; end B (the tail along the tangent
+    t_B = (−sin θ, cos θ, 0) at the end of the arc) has its rotations fixed and is pulled along
+    its tail, u = δ t_B (:func:`pull`; ``extra["delta"]`` holds δ). The friction coefficient is
+    ``contact.friction.mu`` (a Constant: set it to 0 to pre-tension the strip, :func:`pretension`).
+    The reference value is the capstan ratio e^{μθ} of the tail tensions at slip. ``n``: cells
+    along and across the strip, default 80 per π/2 of wrap plus the tails' share, and 2.
     """
     from fenics_garment.materials import Isotropic
 
-    if not np.isclose(theta, np.pi / 2):
-        raise ValueError("the end-B conditions assume θ = π/2")
+    if not 0.0 < theta <= 1.5 * np.pi + 1e-12:
+        raise ValueError(f"wrap angle θ must be in (0, 3π/2] (the tails would cross), got {theta}")
     rho = R + thickness / 2
     total = 2 * tail + rho * theta
+    if n is None:
+        n = (max(16, round(80 * total / (2 * tail + rho * np.pi / 2))), 2)
     mesh = parametric_surface_mesh(
         comm, lambda s, w: _strip_path(s, w, rho, theta, tail),
         (0.0, total), (-width / 2, width / 2), n,
@@ -365,15 +370,90 @@ def capstan_strip(
     model = ShellModel(geo, Isotropic(E=E, nu=0.0, thickness=thickness))
     body = SearchSurface(*cylinder(R, -0.05, 0.05, 2048, 2))
     contact = shell_contact.attach(model, body, kappa_hat=kappa_hat, mu=mu, band=0.01)
-    delta = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
-    end_b = lambda x: np.isclose(x[0], -tail)  # noqa: E731
-    bcs = shell_bcs.clamped(model, lambda x: np.isclose(x[1], -tail))
-    bcs += shell_bcs.fix_components(model, end_b, u=(0,), value=delta)
-    bcs += shell_bcs.fix_components(model, end_b, u=(1,), theta=(0, 1, 2))
+    t_b = np.array([-np.sin(theta), np.cos(theta)])
+    b_end = _strip_path(np.array([total]), np.zeros(1), rho, theta, tail)[:2, 0]
+
+    def end_b(x):
+        return np.hypot(x[0] - b_end[0], x[1] - b_end[1]) < 1e-9
+
+    pull_xy = [dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0)) for _ in range(2)]
+    bcs = shell_bcs.clamped(
+        model, lambda x: np.isclose(x[1], -tail) & np.isclose(x[0], rho, atol=1e-9)
+    )
+    for i in range(2):
+        bcs += shell_bcs.fix_components(model, end_b, u=(i,), value=pull_xy[i])
+    bcs += shell_bcs.fix_components(model, end_b, theta=(0, 1, 2))
     solver = _solver(model, bcs, contact, options)
-    extra = {"delta": delta, "tail": tail, "rho": rho, "theta": theta, "width": width,
-             "EA": E * thickness * width}  # fmt: skip
+    delta = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(0.0))
+    extra = {"delta": delta, "pull_xy": pull_xy, "t_b": t_b, "tail": tail, "rho": rho,
+             "theta": theta, "width": width, "EA": E * thickness * width,
+             "length": total}  # fmt: skip
     return ContactCase(model, contact, solver, bcs, float(np.exp(mu * theta)), R, rho, extra)
+
+
+def pull(scene: ContactCase, delta: float) -> None:
+    """Set the pull of the strip's end B: u = δ t_B (along its tail, outwards)."""
+    scene.extra["delta"].value = delta
+    for c, t in zip(scene.extra["pull_xy"], scene.extra["t_b"], strict=True):
+        c.value = delta * t
+
+
+def pretension(scene: ContactCase, stretch: float, *, steps: int = 4, max_cuts: int = 6) -> list:
+    """Pull end B, frictionless, to the mean stretch ``stretch`` (δ = (stretch − 1)·length) in
+    ``steps`` equal increments, halving an increment whose Newton solve fails; restores μ.
+
+    Returns the Newton iterations of the accepted increments; after an increment that took
+    ≤ 8 iterations the next one doubles again (up to the nominal). Why steps: the strip starts
+    exactly wrapped (gap 0), so the first increment moves the whole contact zone from an
+    unloaded to a pressed state at once; too large a jump leaves Newton's region of
+    convergence (2 increments diverge on a stiffer strip or a smaller cylinder).
+    """
+    friction = scene.contact.friction.mu
+    mu = float(friction.value)
+    friction.value = 0.0
+    target = (stretch - 1.0) * scene.extra["length"]
+    done, step, cuts, its_log = 0.0, target / steps, 0, []
+    q = scene.model.q
+    try:
+        while done < target * (1 - 1e-12):
+            step = min(step, target - done)
+            q_old = q.x.array.copy()
+            pull(scene, done + step)
+            its, reason = scene.solver.solve()
+            if reason > 0:
+                scene.contact.accept_step()
+                done += step
+                its_log.append(its)
+                cuts = 0
+                if its <= 8:  # easy: back up towards the nominal increment
+                    step = min(2 * step, target / steps)
+                continue
+            q.x.array[:] = q_old
+            q.x.scatter_forward()
+            cuts += 1
+            step /= 2
+            if cuts > max_cuts:
+                raise RuntimeError(
+                    f"pre-tension failed at δ = {done + 2 * step:.3g} m after {cuts} halvings"
+                )
+    finally:
+        friction.value = mu
+    return its_log
+
+
+def capstan_slip_pull(scene: ContactCase, tension: float) -> float:
+    """The extra pull of end B [m] at which the whole wrap starts to slip, from a uniform
+    pre-tension ``tension`` [N] (small-strain estimate, to size the pull increments).
+
+    At the onset of full slip the tension is T(φ) = T₀ e^{μφ} along the wrap (φ from the held
+    side) and T₀ e^{μθ} in tail B, so the strip has lengthened by
+    Δ = (T₀/EA) [ρ((e^{μθ} − 1)/μ − θ) + ℓ_tail (e^{μθ} − 1)] over its pre-tensioned state.
+    """
+    e = scene.extra
+    mu = float(scene.contact.friction.mu.value)
+    ratio = np.exp(mu * e["theta"])
+    wrap = (ratio - 1) / mu - e["theta"] if mu > 0 else 0.0
+    return tension / e["EA"] * (e["rho"] * wrap + e["tail"] * (ratio - 1))
 
 
 def tail_tensions(scene: ContactCase) -> tuple[float, float]:
@@ -383,14 +463,16 @@ def tail_tensions(scene: ContactCase) -> tuple[float, float]:
     λ = ℓ/L between two points on its centre line, Green strain E = (λ² − 1)/2, force
     T = λ · E h w · E (first Piola–Kirchhoff force per reference width × width).
     """
-    from fenics_garment.shell.model import evaluate_at_points
+    from fenics_garment.points import PointEvaluator
 
     tail, rho, th = scene.extra["tail"], scene.extra["rho"], scene.extra["theta"]
     s = np.array(
         [0.3 * tail, 0.7 * tail, 2 * tail + rho * th - 0.7 * tail, 2 * tail + rho * th - 0.3 * tail]
     )
     X = _strip_path(s, np.zeros(4), rho, th, tail).T
-    x = X + evaluate_at_points(scene.model.displacement(), X)
+    if "tail_probe" not in scene.extra:  # located once, evaluated at every step
+        scene.extra["tail_probe"] = PointEvaluator(scene.model.geometry.mesh, X)
+    x = X + scene.extra["tail_probe"](scene.model.displacement())
     out = []
     for i, j in ((0, 1), (2, 3)):
         lam = np.linalg.norm(x[j] - x[i]) / np.linalg.norm(X[j] - X[i])

@@ -371,6 +371,74 @@ def pinched_semicylinder(
     return _result("sze-3.7-semicylinder", model, solver, -w, 1.71505, t0)
 
 
+#: Sze et al. 2004, §3.4 (hemispherical shell with an 18° hole, R = 10, h = 0.04, E = 6.825e7,
+#: ν = 0.3, P_max = 400 at each of the four load points, alternating outward/inward): the
+#: radial displacements at the two load points of the quarter model along the load path,
+#: (P/P_max, outward displacement of the point pulled outwards, inward displacement of the point
+#: pushed inwards), from Sze's table of the ABAQUS S4R reference; transcribed in
+#: ElmerCSC/elmerfem, fem/tests/Shell_OpenHemisphere_High_Order/runhemisphere.m (commit 1f69dcbc).
+#: The pushed point moves further (the shell softens there) than the pulled one (it stiffens):
+#: in the linear range both are 0.093 per unit load (MacNeal & Harder), i.e. 0.93 at P/P_max =
+#: 0.05, between the two columns 0.855 / 0.955.
+HEMISPHERE_PATH = np.array([
+    [0.05, 0.855, 0.955], [0.10, 1.499, 1.840], [0.15, 1.969, 2.604], [0.20, 2.321, 3.261],
+    [0.25, 2.596, 3.833], [0.30, 2.819, 4.339], [0.35, 3.002, 4.790], [0.40, 3.158, 5.196],
+    [0.45, 3.291, 5.565], [0.50, 3.406, 5.902], [0.55, 3.508, 6.212], [0.60, 3.598, 6.497],
+    [0.65, 3.678, 6.761], [0.70, 3.750, 7.006], [0.75, 3.816, 7.234], [0.80, 3.875, 7.448],
+    [0.85, 3.929, 7.647], [0.90, 3.979, 7.835], [0.95, 4.025, 8.011], [1.00, 4.067, 8.178],
+])  # fmt: skip
+
+
+def sze_hemisphere(
+    n: int = 16, element: str | None = None, steps_per_point: int = 1, comm=MPI.COMM_WORLD
+) -> CaseResult:
+    """Sze et al. 2004, §3.4: the hemisphere with an 18° hole under alternating radial point
+    loads P = 400 (one outward at A = (R, 0, 0), one inward at B = (0, R, 0); the quarter model
+    carries P/2 at each). The load path is stepped through the 20 load levels of
+    :data:`HEMISPHERE_PATH` (the stepper continues from each to the next) and both radial
+    displacements are read at each by one :class:`~fenics_garment.points.PointEvaluator`.
+
+    ``value``: the inward displacement at B at P_max (reference 8.178); ``extra``: the outward
+    one at A (4.067) and the whole path with its largest relative deviations.
+    """
+    from fenics_garment.points import PointEvaluator
+
+    t0 = time.perf_counter()
+    R = 10.0
+    b0 = math.radians(18.0)
+    mesh = parametric_surface_mesh(
+        comm,
+        lambda a, b: R * np.array([np.sin(b) * np.cos(a), np.sin(b) * np.sin(a), np.cos(b)]),
+        (0, math.pi / 2), (b0, math.pi / 2), (n, n),
+    )  # fmt: skip
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 0, 1)),
+                       Isotropic(E=6.825e7, nu=0.3, thickness=0.04), element=element)  # fmt: skip
+    bcs = (
+        B.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0, atol=1e-9), axis=1)
+        + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0, atol=1e-9), axis=0)
+        + B.fix_point_dofs(model, (R * math.sin(b0), 0.0, R * math.cos(b0)), u=(2,))
+    )
+    model.add_point_load((R, 0.0, 0.0), (200.0, 0.0, 0.0))
+    model.add_point_load((0.0, R, 0.0), (0.0, -200.0, 0.0))
+    solver = NonlinearSolver(model, bcs, petsc_options=None)
+    model.load_factor.value = 0.0
+    stepper = LoadStepper(solver, steps=steps_per_point)
+    probe = PointEvaluator(mesh, [[R, 0.0, 0.0], [0.0, R, 0.0]])
+    path = []
+    for lam in HEMISPHERE_PATH[:, 0]:
+        stepper.run(float(lam))
+        u = probe(model.displacement())
+        path.append((float(lam), u[0, 0], -u[1, 1]))
+    path = np.array(path)
+    ref = HEMISPHERE_PATH
+    dev = path[:, 1:] / ref[:, 1:] - 1
+    return _result("sze-3.4-hemisphere", model, solver, path[-1, 2], ref[-1, 2], t0,
+                   u_A=float(path[-1, 1]), u_A_rel_error=float(dev[-1, 0]),
+                   max_abs_dev_A=float(np.abs(dev[:, 0]).max()),
+                   max_abs_dev_B=float(np.abs(dev[:, 1]).max()),
+                   path=path.tolist())  # fmt: skip
+
+
 #: Sze et al. 2004, §3.6, Tables 9a–f: the first maximum of the load along the path of the
 #: isotropic hinged roof, as P/P_max with P_max = 3000 N, and −W_C (mm) at it; transcribed as
 #: ``SZE_2004`` in saullocastro/panels, notebooks/follower_utils.py (commit 1ea6ab35).
@@ -485,6 +553,7 @@ CASES: dict[str, Callable[..., CaseResult]] = {
     "sze-3.1-cantilever-shear": cantilever_end_shear,
     "sze-3.2-rollup": cantilever_rollup,
     "sze-3.3-slit-annulus": slit_annular_plate,
+    "sze-3.4-hemisphere": sze_hemisphere,
     "sze-3.6-hinged-roof-12.7": lambda n=8, **kw: hinged_roof(12.7, n, **kw),
     "sze-3.6-hinged-roof-6.35": lambda n=8, **kw: hinged_roof(6.35, n, **kw),
     "sze-3.7-semicylinder": pinched_semicylinder,
