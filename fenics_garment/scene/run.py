@@ -50,6 +50,7 @@ from fenics_garment.scene.dressing import (
     dress,
 )
 from fenics_garment.shell.model import DEFAULT_ELEMENT
+from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.solve import NonlinearSolver
 
 #: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
@@ -468,7 +469,7 @@ def solve_stage(
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
-    opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
+    opts = {**SCENE_SNES_OPTIONS, **LINEAR_SOLVERS[scene.solver.linear], **scene.solver.petsc}
     solver = NonlinearSolver(built.model, built.bcs, **built.contact.solver_hooks(),
                              petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
