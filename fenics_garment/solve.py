@@ -191,8 +191,10 @@ class NonlinearSolver:
             opts["pc_type"] = "cholesky"
         if petsc_options:
             opts.update(check_options(petsc_options))
-        if opts["pc_type"] not in ("lu", "cholesky") and opts["ksp_type"] == "preonly" and not (
-            petsc_options and "ksp_type" in petsc_options
+        if (
+            opts["pc_type"] not in ("lu", "cholesky")
+            and opts["ksp_type"] == "preonly"
+            and not (petsc_options and "ksp_type" in petsc_options)
         ):  # an iterative preconditioner alone is no solver: CG for SPD Jacobians, else GMRES
             opts["ksp_type"] = "cg" if symmetric else "gmres"
         self.options = opts
@@ -232,7 +234,8 @@ class NonlinearSolver:
             from fenics_garment.shell.nullspace import near_nullspace
 
             self.near_nullspace = near_nullspace(self.model.Q)
-            for mat in {id(m): m for m in (self.problem.A, self.problem.P_mat) if m is not None}.values():
+            mats = (self.problem.A, self.problem.P_mat)
+            for mat in {id(m): m for m in mats if m is not None}.values():
                 mat.setNearNullSpace(self.near_nullspace)
         self._user_ksp_options(ksp, opts, prefix)
 

@@ -38,6 +38,7 @@ from fenics_garment import output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
+from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.scene import build as scene_build
 from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight
 from fenics_garment.scene import folder as run_folder
@@ -50,7 +51,6 @@ from fenics_garment.scene.dressing import (
     dress,
 )
 from fenics_garment.shell.model import DEFAULT_ELEMENT
-from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.solve import NonlinearSolver
 
 #: Newton settings of a scene unless its [solver.petsc] says otherwise. The relative tolerance
