@@ -154,6 +154,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
             parts += ["Faceted vs smooth body surface (`python -m benchmarks.smooth_body`).", ""]
             parts += [markdown(d), ""]
             continue
+        if name == "solvers":  # linear solvers against mesh size (benchmarks/solvers.py)
+            from benchmarks.solvers import markdown as solvers_markdown
+
+            parts += [solvers_markdown(d), ""]
+            continue
         if name == "speed":  # per-iteration split before/after (benchmarks/speed.py)
             from benchmarks.speed import markdown as speed_markdown
 
