@@ -2,7 +2,7 @@
 
     python -m benchmarks [--quick|--full] [--repeat N] [name ...]
 
-``name`` is a suite (``shells``, ``contact``, ``scenes``) or a shell case of
+``name`` is a suite (``shells``, ``contact``, ``scenes``, ``solvers``) or a shell case of
 :data:`fenics_garment.verification.shells.CASES` (then only those shell cases run). Without
 names the shells and contact suites run. Each suite writes
 ``benchmarks/results/<suite>.json``; the report
@@ -10,7 +10,9 @@ names the shells and contact suites run. Each suite writes
 The contact suite runs its ``--quick`` sizes unless ``--full`` is given (its own full size takes
 tens of minutes). ``scenes`` (gilet cost growth, 1 vs 2 ranks, skips on/off, the FEniCSx-Shells
 peer, the stress table; ``benchmarks/scenes.py``) runs only when named, e.g.
-``python -m benchmarks scenes`` or ``python -m benchmarks scenes growth peer``.
+``python -m benchmarks scenes`` or ``python -m benchmarks scenes growth peer``. ``solvers``
+(direct MUMPS, MUMPS block low-rank and CG + GAMG against mesh size on the Scordelis–Lo roof, 1
+and 2 ranks, and a cost model; ``benchmarks/solvers.py``) likewise runs only when named.
 """
 
 from __future__ import annotations
@@ -18,10 +20,10 @@ from __future__ import annotations
 import sys
 import time
 
-from benchmarks import contact, report, scenes, shells
+from benchmarks import contact, report, scenes, shells, solvers
 from fenics_garment._stack import MPI
 
-SUITES = ("shells", "contact", "scenes")
+SUITES = ("shells", "contact", "scenes", "solvers")
 DEFAULT_SUITES = ["shells", "contact"]
 
 
@@ -44,6 +46,8 @@ def main(argv: list[str] | None = None) -> int:
         contact.main(["--quick"] if mode != "full" else [])
     if "scenes" in suites and comm.rank == 0:  # it starts its own mpiexec subprocesses
         scenes.main(parts + (["--quick"] if mode == "quick" else []))
+    if "solvers" in suites and comm.rank == 0:  # its own mpiexec children, 1 and 2 ranks
+        solvers.main(["--quick"] if mode == "quick" else [])
     if comm.rank == 0:
         report.write_report(say=say)
     say(f"benchmarks ({mode}: {', '.join(suites)}) done in {time.perf_counter() - t0:.0f} s")

@@ -407,25 +407,38 @@ def release(mode: str, say) -> tuple[list[dict], dict]:
 # --------------------------------------------------------------------------------------------
 # peer
 # --------------------------------------------------------------------------------------------
-def adapt_peer(source: str, n: int) -> str:
+#: the peer's load steps: 10 is its best setting (the same answer as its default 40, measured
+#: −0.36 % both, in a quarter of the time); its load step is 2000 N / steps
+PEER_STEPS = 10
+
+
+def adapt_peer(source: str, n: int, steps: int = PEER_STEPS) -> str:
     """Our substitutions on the peer demo for DOLFINx 0.11 and timing: the old Newton problem
-    class under its new name, the new point-ownership signature, an n×n mesh, no plots or files
-    after the load loop, and a JSON line with the wall time and the deflection under the load
-    at P = 2000 (the demo's sign: down)."""
+    class under its new name, the new point-ownership signature, an n×n mesh, ``steps`` load
+    steps to P = 2000, no plots or files after the load loop, and a JSON line with the wall time
+    (from the end of its imports, like ours) and the deflection under the load at P = 2000 (the
+    demo's sign: down)."""
     s = source.replace("from dolfinx.fem.petsc import NonlinearProblem,",
                        "from dolfinx.fem.petsc import NewtonSolverNonlinearProblem as "
                        "NonlinearProblem,")  # fmt: skip
     s = s.replace("[20, 20]", f"[{n}, {n}]")
+    load_loop = "PS_diff = 50.0\nn_step = 40\n"
+    if load_loop not in s:
+        raise ValueError("peer demo changed: its load steps (PS_diff, n_step) not found")
+    s = s.replace(load_loop, f"PS_diff = {2000.0 / steps!r}\nn_step = {steps}\n")
+    first = s.index("\nr = 1.016")  # the first statement after the imports
+    s = s[:first] + "\n_T0, _C0 = _time.perf_counter(), _time.process_time()" + s[first:]
     # 0.11: determine_point_ownership takes the candidate cells (None: all)
     s = s.replace("mesh._cpp_object, points, 1e-6\n", "mesh._cpp_object, points, 1e-6, None\n")
     s = s.replace("solver.report = True", "solver.report = False")
     cut = s.index("u_P2B3 = q_func.sub(0).collapse()")
     ndofs = "naghdi_shell_FS.dofmap.index_map.size_global * naghdi_shell_FS.dofmap.index_map_bs"
     return (
-        "import time as _time\n_T0 = _time.perf_counter()\n"
+        "import time as _time\n"
         + s[:cut]
         + "if mesh.comm.rank == 0:\n    import json as _json\n"
         + "    print('PEER ' + _json.dumps({'wall_s': _time.perf_counter() - _T0, "
+        + "'cpu_s': _time.process_time() - _C0, "
         + f"'value': float(u3_list[-1]), 'dofs': int({ndofs}), 'steps': n_step}}))\n"
     )
 
@@ -448,34 +461,65 @@ def peer(mode: str, say) -> list[dict]:
                      "status": "peer unavailable", "error": str(err)[:200],
                      "loadavg": os.getloadavg()})  # fmt: skip
         src = None
-    if src is not None:
-        with tempfile.TemporaryDirectory() as tmp:
-            script = Path(tmp) / "peer_semicylinder.py"
+    ours = PEER_OURS["quick" if mode == "quick" else "default"]
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "peer_semicylinder.py"
+        if src is not None:
             script.write_text(adapt_peer(src, n_peer))
-            for _ in range(2):  # the first run compiles the peer's forms
-                p = subprocess.run([sys.executable, str(script)], cwd=tmp, env=_env(),
-                                   capture_output=True, text=True, timeout=1800)  # fmt: skip
-            line = [x for x in p.stdout.splitlines() if x.startswith("PEER ")]
-            if line:
-                d = json.loads(line[-1][5:])
-                recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells", "n": n_peer,
-                             "ranks": 1, **d, "reference": ref,
-                             "rel_error": abs(d["value"]) / ref - 1, "status": "ok",
-                             "commit": _peer_commit(), "loadavg": os.getloadavg()})  # fmt: skip
-            else:
-                recs.append({"case": "peer-semicylinder", "variant": "fenicsx-shells",
-                             "status": "failed", "error": (p.stderr or p.stdout)[-600:],
-                             "loadavg": os.getloadavg()})  # fmt: skip
-    for n in [8] if mode == "quick" else [16, 20]:
-        r = sh.run_one(sh.Run("sze-3.7-semicylinder", n, sh.DEFAULT_ELEMENT, "direct-5steps"))
-        r = {k: v for k, v in r.items() if k != "traceback"}
-        r["case"], r["wall_s"] = "peer-semicylinder", r.get("warm_wall_s", r["wall_s"])
-        recs.append(r | {"variant": "fenics-garment", "loadavg": os.getloadavg()})
+        # warm-up (the first runs compile or load the forms), then PEER_REPEATS interleaved
+        # rounds of both codes, each keeping its fastest run: the load of the shared machine
+        # drifts, and interleaving exposes both codes to it alike
+        best: dict[tuple, dict] = {}
+        for rnd in range(PEER_REPEATS + 1):
+            if src is not None:
+                rec = _run_peer(script, tmp, n_peer, ref)
+                if rnd and (("peer",) not in best or _faster(rec, best[("peer",)])):
+                    best[("peer",)] = rec
+            for n, setting in ours:
+                rec = _run_ours(sh, n, setting)
+                if rnd and ((n, setting) not in best or _faster(rec, best[(n, setting)])):
+                    best[(n, setting)] = rec
+        recs += list(best.values())
     for r in recs:
         err = 100 * r.get("rel_error", math.nan)
-        say(f"  {r['variant']:16} n={r.get('n')} {r.get('status')} wall "
-            f"{r.get('wall_s', math.nan):.1f} s err {err:+.3f} %")  # fmt: skip
+        say(f"  {r['variant']:16} {r.get('setting', ''):14} n={r.get('n')} {r.get('status')} "
+            f"wall {r.get('wall_s', math.nan):.1f} s cpu {r.get('cpu_s', math.nan):.1f} s "
+            f"err {err:+.3f} % Newton its {r.get('newton_its')}")  # fmt: skip
     return recs
+
+
+#: our settings in the peer comparison: (n, benchmarks.shells solver setting)
+PEER_OURS = {"quick": [(8, "peer-fast")],
+             "default": [(16, "direct-5steps"), (16, "peer-fast"), (20, "peer-fast")]}  # fmt: skip
+PEER_REPEATS = 2
+
+
+def _faster(a: dict, b: dict) -> bool:
+    return a.get("status") == "ok" and (b.get("status") != "ok" or a["cpu_s"] < b["cpu_s"])
+
+
+def _run_peer(script: Path, tmp: str, n: int, ref: float) -> dict:
+    p = subprocess.run([sys.executable, str(script)], cwd=tmp, env=_env(),
+                       capture_output=True, text=True, timeout=1800)  # fmt: skip
+    line = [x for x in p.stdout.splitlines() if x.startswith("PEER ")]
+    if not line:
+        return {"case": "peer-semicylinder", "variant": "fenicsx-shells", "status": "failed",
+                "error": (p.stderr or p.stdout)[-600:], "loadavg": os.getloadavg()}  # fmt: skip
+    d = json.loads(line[-1][5:])
+    return {"case": "peer-semicylinder", "variant": "fenicsx-shells", "n": n, "ranks": 1, **d,
+            "reference": ref, "rel_error": abs(d["value"]) / ref - 1, "status": "ok",
+            "commit": _peer_commit(), "loadavg": os.getloadavg()}  # fmt: skip
+
+
+def _run_ours(sh, n: int, setting: str) -> dict:
+    """One run of our semi-cylinder in this process: wall time from the mesh to the answer
+    (forms from the warm JIT cache included, as for the peer) and the CPU time of the process."""
+    c0 = time.process_time()
+    r = sh.run_one(sh.Run("sze-3.7-semicylinder", n, sh.DEFAULT_ELEMENT, setting))
+    cpu = time.process_time() - c0
+    r = {k: v for k, v in r.items() if k != "traceback"}
+    return r | {"case": "peer-semicylinder", "variant": "fenics-garment", "setting": setting,
+                "cpu_s": cpu, "loadavg": os.getloadavg()}  # fmt: skip
 
 
 def _peer_commit() -> str:
@@ -485,17 +529,29 @@ def _peer_commit() -> str:
 
 
 def peer_ratio(recs: list[dict]) -> dict:
-    """Our fastest run at an error no larger than the peer's, against the peer's time."""
+    """Our fastest run (CPU time) at an error no larger than the peer's, against the peer's
+    time: wall and CPU-time ratios (on a loaded machine the CPU time is the steadier one)."""
     peers = [r for r in recs if r["variant"] == "fenicsx-shells" and r.get("status") == "ok"]
     ours = [r for r in recs if r["variant"] == "fenics-garment" and r.get("status") == "ok"]
     if not peers or not ours:
         return {}
     p = peers[0]
     good = [r for r in ours if abs(r["rel_error"]) <= abs(p["rel_error"])] or ours
-    best = min(good, key=lambda r: r["wall_s"])
-    return {"peer_wall_s": p["wall_s"], "peer_error": p["rel_error"], "ours_n": best["n"],
-            "ours_wall_s": best["wall_s"], "ours_error": best["rel_error"],
-            "time_ratio": best["wall_s"] / p["wall_s"]}  # fmt: skip
+    best = min(good, key=lambda r: r["cpu_s"])
+    return {
+        "peer_wall_s": p["wall_s"],
+        "peer_cpu_s": p["cpu_s"],
+        "peer_error": p["rel_error"],
+        "peer_steps": p.get("steps"),
+        "ours_n": best["n"],
+        "ours_setting": best["setting"],
+        "ours_wall_s": best["wall_s"],
+        "ours_cpu_s": best["cpu_s"],
+        "ours_error": best["rel_error"],
+        "ours_newton_its": best.get("newton_its"),
+        "time_ratio": best["wall_s"] / p["wall_s"],
+        "cpu_ratio": best["cpu_s"] / p["cpu_s"],
+    }
 
 
 # --------------------------------------------------------------------------------------------

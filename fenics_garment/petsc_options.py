@@ -131,7 +131,30 @@ OPTIONS: dict[str, Check] = {
     "pc_gamg_threshold": _real(-1.0, 1.0),
     "pc_gamg_agg_nsmooths": _integer(0, 10),
     "pc_hypre_type": _choice(("boomeramg", "pilut", "euclid")),
+    "mg_levels_ksp_type": _choice(("chebyshev", "richardson", "gmres", "cg")),
+    "mg_levels_pc_type": _choice(("jacobi", "sor", "bjacobi", "asm", "none")),
+    "mg_levels_ksp_max_it": _integer(1, 100),
 }
+#: Linear solvers by name (scene ``[solver] linear``; the options of ``[solver.petsc]`` go on top):
+#:
+#: * ``direct``: MUMPS LDLᵀ or LU (:class:`~fenics_garment.solve.NonlinearSolver` chooses), the
+#:   default: fastest up to the largest garments measured here (``benchmarks/solvers.py``);
+#: * ``direct-blr``: the same with MUMPS block low-rank compression (ICNTL(35) = 1, automatic;
+#:   CNTL(7) = 1e-9 the dropping threshold: the factors are exact to about that, well below the
+#:   Newton tolerance): fewer flops and less memory on large meshes;
+#: * ``gamg``: a Krylov method (CG when the Jacobian is symmetric, GMRES otherwise) preconditioned
+#:   by smoothed-aggregation AMG with the shell's six rigid-body modes as near-nullspace
+#:   (:mod:`fenics_garment.shell.nullspace`) and SOR smoothing: iterations nearly independent
+#:   of the mesh (Scordelis–Lo roof: 83 / 92 / 99 at 9.6k / 38k / 84k dofs), work ∝ dofs, the
+#:   path that scales past one machine. Without the rigid-body modes GAMG needed 1061 iterations
+#:   at 9.6k dofs.
+LINEAR_SOLVERS: dict[str, dict[str, object]] = {
+    "direct": {},
+    "direct-blr": {"mat_mumps_icntl_35": 1, "mat_mumps_cntl_7": 1e-9},
+    "gamg": {"pc_type": "gamg", "ksp_rtol": 1e-8, "ksp_max_it": 2000,
+             "ksp_gmres_restart": 200, "mg_levels_pc_type": "sor"},
+}  # fmt: skip
+
 FLAGS = ("snes_monitor", "snes_converged_reason", "snes_linesearch_monitor", "snes_view",
          "ksp_monitor", "ksp_converged_reason", "ksp_view", "options_left")  # fmt: skip
 OPTIONS |= dict.fromkeys(FLAGS, _flag)

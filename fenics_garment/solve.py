@@ -13,6 +13,9 @@
   counts them,
 * the options checked against what this design supports (:mod:`fenics_garment.petsc_options`)
   before PETSc sees them,
+* an iterative solver on request (``pc_type = "gamg"``, :data:`ITERATIVE_OPTIONS`): the shell's
+  rigid-body modes are set as the Jacobian's near-nullspace, and without a ``ksp_type`` the
+  Krylov method is CG for a symmetric Jacobian, GMRES otherwise,
 * a direct solver by default, set on the KSP/PC objects directly (NonlinearProblem drops the
   options it does not consume at construction): MUMPS LDLᵀ (``cholesky``, half the flops of LU)
   when the Jacobian is symmetric — a model whose residual is the derivative of an energy, i.e.
@@ -40,7 +43,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fenics_garment._stack import MPI, PETSc, dolfinx
-from fenics_garment.petsc_options import check_options
+from fenics_garment.petsc_options import LINEAR_SOLVERS, check_options
 
 DEFAULT_SNES_OPTIONS: dict[str, object] = {
     "snes_type": "newtonls",
@@ -74,14 +77,14 @@ JIT_OPTIONS: dict[str, object] = {
 measured ≈ 10 % faster shell Jacobian assembly on a quiet machine, one recompile of every form,
 and a JIT cache (~/.cache/fenics) that must not be shared with machines of another CPU)."""
 
-ITERATIVE_OPTIONS: dict[str, object] = {
-    "ksp_type": "gmres",
-    "ksp_rtol": 1e-8,
-    "ksp_max_it": 500,
-    "ksp_gmres_restart": 100,
-    "pc_type": "gamg",
-}
-"""An iterative alternative to the direct solver (pass as ``petsc_options``): GMRES + GAMG."""
+ITERATIVE_OPTIONS: dict[str, object] = dict(LINEAR_SOLVERS["gamg"])
+"""An iterative alternative to the direct solver (pass as ``petsc_options``): CG (symmetric
+Jacobian) or GMRES + GAMG with the shell's rigid-body near-nullspace
+(:data:`fenics_garment.petsc_options.LINEAR_SOLVERS`)."""
+
+
+#: PETSc options left in the database for a solver's multigrid levels, by options prefix
+_KEPT: dict[str, list[str]] = {}
 
 
 class SolveFailed(RuntimeError):
@@ -188,6 +191,12 @@ class NonlinearSolver:
             opts["pc_type"] = "cholesky"
         if petsc_options:
             opts.update(check_options(petsc_options))
+        if (
+            opts["pc_type"] not in ("lu", "cholesky")
+            and opts["ksp_type"] == "preonly"
+            and not (petsc_options and "ksp_type" in petsc_options)
+        ):  # an iterative preconditioner alone is no solver: CG for SPD Jacobians, else GMRES
+            opts["ksp_type"] = "cg" if symmetric else "gmres"
         self.options = opts
         F = model.residual()
         J = model.jacobian(F)
@@ -221,6 +230,13 @@ class NonlinearSolver:
         pc.setType(opts["pc_type"])
         if opts["pc_type"] in ("lu", "cholesky"):
             pc.setFactorSolverType(opts["pc_factor_mat_solver_type"])
+        if opts["pc_type"] == "gamg" and getattr(self.model, "Q", None) is not None:
+            from fenics_garment.shell.nullspace import near_nullspace
+
+            self.near_nullspace = near_nullspace(self.model.Q)
+            mats = (self.problem.A, self.problem.P_mat)
+            for mat in {id(m): m for m in mats if m is not None}.values():
+                mat.setNearNullSpace(self.near_nullspace)
         self._user_ksp_options(ksp, opts, prefix)
 
     def _measure_floor(self, opts: dict) -> float:
@@ -263,17 +279,25 @@ class NonlinearSolver:
 
     # -- PETSc plumbing ------------------------------------------------------------------------
     def _user_ksp_options(self, ksp, opts: dict, prefix: str) -> None:
-        extra = {k: v for k, v in opts.items() if k.startswith(("ksp_", "pc_", "mat_"))}
+        extra = {k: v for k, v in opts.items() if k.startswith(("ksp_", "pc_", "mat_", "mg_"))}
         if opts["pc_type"] not in ("lu", "cholesky"):  # e.g. MUMPS has no ILU
             extra.pop("pc_factor_mat_solver_type", None)
+        o = PETSc.Options()
+        for k in _KEPT.pop(prefix, ()):  # a previous solver's multigrid level options
+            o.delValue(f"{prefix}{k}")
         if not extra:
             return
-        o = PETSc.Options()
         for k, v in extra.items():
             o[f"{prefix}{k}"] = v
         ksp.setFromOptions()
+        # The multigrid levels are made, and read their options, at the first solve: keep those
+        # in the database (under this solver's prefix) until another solver takes the prefix.
+        kept = [k for k in extra if k.startswith("mg_")]
         for k in extra:
-            del o[f"{prefix}{k}"]
+            if k not in kept:
+                del o[f"{prefix}{k}"]
+        if kept:
+            _KEPT[prefix] = kept
 
     def _zero_bc_rows(self, vec) -> None:
         for bc in self.bcs:

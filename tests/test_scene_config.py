@@ -46,6 +46,7 @@ def test_bundled_scenes_load(name):
         ("[physics]\nbody_surface = 'smoth'\n", "physics.body_surface", "did you mean 'smooth'"),
         ("[garment]\nmesh_size = 0\n", "garment.mesh_size", "must be positive"),
         ("[garment]\nkind = 'tube'\n", "garment.kind", "needs a cylinder body"),
+        ("[solver]\nlinear = 'gmag'\n", "solver.linear", "did you mean 'gamg'"),
     ],
 )  # fmt: skip
 def test_errors_name_file_and_key(tmp_path, text, key, words):

@@ -36,6 +36,7 @@ from pathlib import Path
 from typing import Any
 
 from fenics_garment.contact.terms import MU_SKIN_COTTON
+from fenics_garment.petsc_options import LINEAR_SOLVERS
 
 
 class SceneError(ValueError):
@@ -174,8 +175,13 @@ class DressingConfig:
 
 @dataclass(frozen=True)
 class SolverConfig:
-    """PETSc options passed through to SNES/KSP (e.g. snes_max_it = 30)."""
+    """The linear solver by name and PETSc options passed through to SNES/KSP on top of it
+    (e.g. snes_max_it = 30). ``linear``: "direct" (MUMPS, the default), "direct-blr" (MUMPS
+    block low-rank) or "gamg" (CG/GMRES + algebraic multigrid with the shell's rigid-body
+    near-nullspace, the path for meshes beyond one machine);
+    :data:`fenics_garment.petsc_options.LINEAR_SOLVERS`."""
 
+    linear: str = "direct"
     petsc: dict[str, Any] = field(default_factory=dict)
 
 
@@ -474,6 +480,7 @@ def _check(s: Scene) -> None:
     _one_of(d.spring_anchor, SPRING_ANCHORS, src, "dressing.spring_anchor")
     _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
              f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip
+    _one_of(s.solver.linear, tuple(LINEAR_SOLVERS), src, "solver.linear")
     o = s.output
     _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
              f"is a sensor's diameter in metres, in (0, 0.2], got {o.sensor_diameter}")  # fmt: skip

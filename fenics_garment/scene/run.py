@@ -38,6 +38,7 @@ from fenics_garment import output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
+from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.scene import build as scene_build
 from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight
 from fenics_garment.scene import folder as run_folder
@@ -468,7 +469,7 @@ def solve_stage(
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
-    opts = {**SCENE_SNES_OPTIONS, **scene.solver.petsc}
+    opts = {**SCENE_SNES_OPTIONS, **LINEAR_SOLVERS[scene.solver.linear], **scene.solver.petsc}
     solver = NonlinearSolver(built.model, built.bcs, **built.contact.solver_hooks(),
                              petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)

@@ -101,6 +101,33 @@ def _solve(model, bcs, steps, point_loads=None, options=None, **stepper):
 # ---------------------------------------------------------------------------------------------
 # Linear cases
 # ---------------------------------------------------------------------------------------------
+SCORDELIS_LO = (25.0, 50.0, math.radians(40.0))  # R, L, φ
+#: the mid-point of the free edge, where the reference deflection is given
+SCORDELIS_LO_POINT = (25.0 * math.sin(SCORDELIS_LO[2]), 25.0, 25.0 * math.cos(SCORDELIS_LO[2]))
+
+
+def scordelis_lo_model(
+    n: int = 8, element: str | None = None, thickness: float = 0.25, comm=MPI.COMM_WORLD,
+    supported: bool = True,
+) -> tuple[ShellModel, list]:  # fmt: skip
+    """The quarter Scordelis–Lo roof of :func:`scordelis_lo` (n×n cells, load scaled by
+    ``LINEAR_SCALE·(t/0.25)²``) and its boundary conditions (none if not ``supported``)."""
+    R, L, phi = SCORDELIS_LO
+    scale = (thickness / 0.25) ** 2
+    mesh = parametric_surface_mesh(
+        comm, lambda a, y: np.array([R * np.sin(a), y, R * np.cos(a)]), (0, phi), (0, L / 2), (n, n)
+    )
+    material = Isotropic(E=4.32e8, nu=0.0, thickness=thickness)
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
+    model.add_distributed_load((0.0, 0.0, -90.0 * scale * LINEAR_SCALE))
+    if not supported:
+        return model, []
+    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], 0.0), u=(0, 2))
+           + B.symmetry_plane(model, lambda x: np.isclose(x[1], L / 2), axis=1)
+           + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0))  # fmt: skip
+    return model, bcs
+
+
 def scordelis_lo(
     n: int = 8, element: str | None = None, thickness: float = 0.25, comm=MPI.COMM_WORLD
 ) -> CaseResult:
@@ -118,19 +145,10 @@ def scordelis_lo(
     scales with t); the value is scaled by linearity.
     """
     t0 = time.perf_counter()
-    R, L, phi = 25.0, 50.0, math.radians(40.0)
+    model, bcs = scordelis_lo_model(n, element, thickness, comm)
     scale = (thickness / 0.25) ** 2
-    mesh = parametric_surface_mesh(
-        comm, lambda a, y: np.array([R * np.sin(a), y, R * np.cos(a)]), (0, phi), (0, L / 2), (n, n)
-    )
-    material = Isotropic(E=4.32e8, nu=0.0, thickness=thickness)
-    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
-    model.add_distributed_load((0.0, 0.0, -90.0 * scale * LINEAR_SCALE))
-    bcs = (B.fix_components(model, lambda x: np.isclose(x[1], 0.0), u=(0, 2))
-           + B.symmetry_plane(model, lambda x: np.isclose(x[1], L / 2), axis=1)
-           + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0), axis=0))  # fmt: skip
     solver = _solve(model, bcs, 1)
-    w = evaluate_at_points(model.displacement(), [[R * math.sin(phi), L / 2, R * math.cos(phi)]])
+    w = evaluate_at_points(model.displacement(), [SCORDELIS_LO_POINT])
     reference = 0.3024 if thickness == 0.25 else math.nan
     value = -w[0, 2] / (scale * LINEAR_SCALE) * (thickness / 0.25) ** 3
     return _result("scordelis-lo", model, solver, value, reference, t0, thickness=thickness)
