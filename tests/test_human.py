@@ -153,6 +153,23 @@ def test_arm_joints_and_girths_against_the_construction(body, side):
         assert girth == pytest.approx(M.girth(level), rel=0.025), level
 
 
+def test_knees_at_the_construction(body):
+    """The human's lofted leg tapers from thigh to ankle without a calf or a narrowing (knee
+    girth 0.37 m over a 0.35 m calf, a straight leg): nothing on the surface marks its knee, so
+    the rule falls back to the proportional height (limbs.KNEE_HEIGHT, Drillis & Contini's
+    0.285 × stature, which the construction also uses: this checks that the monotone girth
+    and the straight centreline no longer pull the knee away from it — before, the horizontal
+    knee was found at 0.547 m and the limb's at 0.567 m against 0.479 m). The real knee of a
+    scan is checked against MakeHuman's rig in tests/test_scan_makehuman.py."""
+    z = M.height("knee")
+    assert body.landmarks["knee"] == pytest.approx(z, abs=0.015)
+    assert body.landmarks["calf"] < body.landmarks["knee"] < body.landmarks["thigh"]
+    for side in ("left", "right"):
+        limb = body.limbs[f"leg_{side}"]
+        assert limb.point("knee")[0, 2] == pytest.approx(z, abs=0.015), side
+        assert limb.marks["thigh"] < limb.marks["knee"] < limb.marks["calf"], side
+
+
 def test_head_and_neck(body):
     """The head's widest horizontal girth is the requested head girth; the neck and the head's
     start (the jaw) lie between the construction's neck level and the head ellipsoid."""

@@ -805,6 +805,8 @@ def make_dress(
     e.setdefault("neck", e["neck_base"])
     levels, table = _levels_from(body, names, e, min_clearance, extra)
     table = table[:-1]  # the neck section only guides the loft; it is cut away
+    if getattr(body, "part", None) is not None:  # a segmented body: legs apart, arms beside
+        _skirt_around_the_legs(body, levels, table, [f"skirt_{k}" for k in range(n_sk)])
     z_hem = levels["skirt_0"][0]
     z_top = levels["neck_base"][0]
     cuts, x_neck, z_arm = _top_cuts(
@@ -817,6 +819,60 @@ def make_dress(
         lambda g: _build(g, "dress", levels, cuts, cls, h, quads, 3, order=order),
         table,
     )
+
+
+#: the skirt's least clearance [m] around the legs of a segmented body (:func:`make_dress`)
+SKIRT_CLEARANCE = 0.01
+
+
+def _skirt_around_the_legs(
+    body: BodySurface,
+    levels: dict[str, tuple[float, Array]],
+    table: list[GarmentLevel],
+    skirt: list[str],
+) -> None:
+    """Widen the skirt sections (bottom to top in ``skirt``) of a segmented body so that the
+    skirt hangs clear of its legs and arms, in place.
+
+    A flared cone from the hip section assumes legs that stay inside the hip's outline; a real
+    body stands with its knees apart (MakeHuman: the cone cut 21 mm into the knees). Each skirt
+    section is widened to the convex hull of the hip section and of every leg point from the
+    next skirt level down (one level spacing below it) up to the hip, offset by
+    :data:`SKIRT_CLEARANCE` (a convex curve around both): consecutive sections then both enclose
+    the legs between them, and so does the loft interpolating them. The flare stays where it is
+    wider. Arms and hands must not reach inside the skirt: refused with the heights."""
+    from .anatomy import PARTS
+
+    z_hip, hip = levels["hip"]
+    tri = body.triangles
+    leg = np.isin(body.part, [PARTS["leg_left"], PARTS["leg_right"]])
+    pts = body.vertices[np.unique(tri[leg])]
+    zs = [levels[k][0] for k in skirt]
+    rows = {r.name: i for i, r in enumerate(table)}
+    g_hip = table[rows["hip"]].body_girth
+    for k, name in enumerate(skirt):
+        z, cur = levels[name]
+        lo = z - (zs[1] - zs[0] if len(zs) > 1 else 0.0) if k == 0 else zs[k - 1]
+        near = pts[(pts[:, 2] >= lo) & (pts[:, 2] <= z_hip), :2]
+        if not len(near) or np.all(sec.signed_distance_2d(near, cur) <= -SKIRT_CLEARANCE):
+            continue
+        env = sec.resample_by_angle(sec.convex_hull(np.vstack([hip, near])), 720)
+        around = sec.offset_by(env, SKIRT_CLEARANCE)
+        target = max(sec.perimeter(cur), sec.perimeter(around))
+        new, d = sec.offset_to_perimeter(env, target)
+        levels[name] = (z, new)
+        girth = sec.perimeter(new)
+        table[rows[name]] = GarmentLevel(name, z, g_hip, girth / g_hip - 1.0, girth, d)
+    arm = np.isin(body.part, [PARTS["arm_left"], PARTS["arm_right"]])
+    hands = body.vertices[np.unique(tri[arm])]
+    for name in ["hip", *skirt]:
+        z, cur = levels[name]
+        band = hands[np.abs(hands[:, 2] - z) < 0.05]
+        if len(band) and np.any(sec.signed_distance_2d(band[:, :2], cur) < SKIRT_CLEARANCE):
+            raise GeometryError(
+                f"dress: an arm or hand hangs inside the skirt at z = {z:.2f} m; "
+                "shorten the skirt (length) or pose the arms away from the hips"
+            )
 
 
 STOCKING_EASE = {"ankle": -0.20, "calf": -0.16, "knee": -0.13, "thigh": -0.10}
