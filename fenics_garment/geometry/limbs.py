@@ -101,6 +101,9 @@ class Limb:
     girth: Array
     marks: dict[str, float]
     sections: dict[str, Array] = field(default_factory=dict)
+    #: the body's vertices and the limb's own triangles, for sections anywhere (section_at)
+    vertices: Array | None = field(default=None, repr=False)
+    triangles: IArray | None = field(default=None, repr=False)
 
     @property
     def length(self) -> float:
@@ -137,6 +140,15 @@ class Limb:
 
             raise MissingRegion(level, tuple(self.sections))
         return self.landmarks[base], self.sections[base]
+
+    def section_at(self, z: float) -> Array | None:
+        """The limb's own smoothed tape section at z' = ``z`` in its station's frame (as the
+        levels' sections), or None where the plane meets more than the limb."""
+        if self.vertices is None or self.triangles is None:
+            return None
+        c, t, e1, e2 = (x[0] for x in self.frame_at(self.length - z))
+        p = own_section(self.vertices, self.triangles, c, t, e1, e2)
+        return None if p is None else smooth_section(sec.convex_hull(p))
 
     def to_world(self, x: Array) -> Array:
         """Straightened coordinates (x', y', z') -> points on the limb: C(s) + x' e1 + y' e2."""
@@ -382,8 +394,8 @@ def analyse_limb(v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str) ->
         marks = arm_marks(s, c, girth, stature, name)
     else:
         marks = leg_marks(s, c, girth, stature, name, top=float(v[:, 2].max()))
-    limb = Limb(name, s, c, tan, e1, e2, girth, marks)
     lt = t[mine]
+    limb = Limb(name, s, c, tan, e1, e2, girth, marks, vertices=v, triangles=lt)
     for level, sl in marks.items():
         cc, tt, a, b = (x[0] for x in limb.frame_at(sl))
         p = own_section(v, lt, cc, tt, a, b)
