@@ -353,12 +353,14 @@ def test_human_gilet_scene_dresses(tmp_path):
 def test_human_sleeve_against_laplace(tmp_path):
     """demos/human_sleeve.toml: the sleeve dressed on the human's own left arm, followed along
     its centreline as a scan's, completes with the spring released and penetration below 1 %
-    of the thickness; at the forearm, elbow and upper arm the mean pressure in a ±1 cm band is
-    Laplace's n_θθ / R_eq for the level's ease and the arm's girth cut perpendicular to it
-    (the checks of the scan's limbs, tests/test_scan_makehuman.py; 15 % as there: the arm's
-    axial curvature at the elbow and its taper are what Laplace neglects)."""
+    of the thickness; at the forearm and elbow the mean pressure in a ±1 cm band is Laplace's
+    n_θθ / R_eq for the level's ease and the arm's girth cut perpendicular to it (the checks of
+    the scan's limbs, tests/test_scan_makehuman.py; 15 % as there: the arm's axial curvature at
+    the elbow, its taper, and the sleeve's axial hold while the arm grows (the stuck hoop
+    state, +7 %) are what Laplace neglects). Measured (1 rank): forearm 2370 Pa against 2199 Pa
+    (+7.8 %), elbow 1933 against 1790 Pa (+8.0 %). The upper arm is not compared: the A-pose
+    arm hangs so close to the chest there that a plane normal to it cuts the torso too."""
     from test_scan_makehuman import limb_garment_against_laplace
 
-    limb_garment_against_laplace(
-        "human_sleeve.toml", "arm_left", ("forearm", "elbow", "upper_arm"), 0.15, tmp_path
-    )
+    limb_garment_against_laplace("human_sleeve.toml", "arm_left", ("forearm", "elbow"), 0.15,
+                                 tmp_path)  # fmt: skip

@@ -298,7 +298,10 @@ def test_dress_on_the_scan_body(scan):
     d = gm.make_dress(body, h=0.03)  # check_garment ran inside: bounded, no fold
     for side in ("left", "right"):
         p = d.points[np.unique(d.edge_nodes[f"armhole_{side}"])]
-        assert np.all(np.abs(p[:, 0] - body.arm_cut[side]) < 0.05), side
+        # below the straps (whose inner edge, where the back scoop meets the armhole, is also
+        # named armhole: measured x = 0.07 m at 1.38–1.41 m), round the arm root
+        low = p[p[:, 2] < body.landmarks["armpit"] + 0.08]
+        assert np.all(np.abs(low[:, 0] - body.arm_cut[side]) < 0.05), side
         assert p[:, 2].min() < body.landmarks["armpit"]
 
     def dist_to(*parts: str) -> np.ndarray:
