@@ -365,7 +365,8 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
     A leg without a calf — its widest girth in the calf's range at the top of the range, the
     leg tapering all the way down, as the human mannequin's lofted leg (knee girth 0.37 m over
     a 0.35 m calf) — has no narrowing to mark the knee: the knee is then the proportional
-    height, and the calf the widest girth 2 % of the stature below it."""
+    height, and the calf the widest girth 2 % of the stature below it. (The stature is the
+    body's top above the floor: on a headless scan the proportional height falls short.)"""
     zl = np.linspace(0.02 * H, crotch - 0.01 * H, 90)
     leg = {}
     for z in zl:

@@ -943,9 +943,10 @@ def _follow_the_limb(
     With the levels alone the loft interpolates the garment's girth between sections up to
     21 cm apart while the leg's girth does not change linearly (the ankle-to-calf stretch of
     the MakeHuman leg): the stocking's ease went from −8 % at the ankle to −0.6 % half-way to the
-    calf and back to −8 %, and the ankle band, between the loft's dip towards the hem (whose
-    section copied the ankle's while the heel widens under it) and the slow rise above, was
-    at −9 %, +11 % of Laplace's pressure for −8 % (measured, README)."""
+    calf and back to −8 % (its pressure 3.7 → 0.27 → 1.9 kPa), and the ankle band, between
+    the loft's dip towards the hem (whose section copied the ankle's while the heel widens
+    under it) and the slow rise above, was at −9 % (measured; README, "Your own body scan").
+    The end sections are the limb's own there too, where the plane meets the limb alone."""
     if limb is None:
         return levels
     rows = sorted(table, key=lambda r: r.z)
