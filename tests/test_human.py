@@ -153,6 +153,23 @@ def test_arm_joints_and_girths_against_the_construction(body, side):
         assert girth == pytest.approx(M.girth(level), rel=0.025), level
 
 
+def test_knees_at_the_construction(body):
+    """The human's lofted leg tapers from thigh to ankle without a calf or a narrowing (knee
+    girth 0.37 m over a 0.35 m calf, a straight leg): nothing on the surface marks its knee, so
+    the rule falls back to the proportional height (limbs.KNEE_HEIGHT, Drillis & Contini's
+    0.285 × stature, which the construction also uses: this checks that the monotone girth
+    and the straight centreline no longer pull the knee away from it — before, the horizontal
+    knee was found at 0.547 m and the limb's at 0.567 m against 0.479 m). The real knee of a
+    scan is checked against MakeHuman's rig in tests/test_scan_makehuman.py."""
+    z = M.height("knee")
+    assert body.landmarks["knee"] == pytest.approx(z, abs=0.015)
+    assert body.landmarks["calf"] < body.landmarks["knee"] < body.landmarks["thigh"]
+    for side in ("left", "right"):
+        limb = body.limbs[f"leg_{side}"]
+        assert limb.point("knee")[0, 2] == pytest.approx(z, abs=0.015), side
+        assert limb.marks["thigh"] < limb.marks["knee"] < limb.marks["calf"], side
+
+
 def test_head_and_neck(body):
     """The head's widest horizontal girth is the requested head girth; the neck and the head's
     start (the jaw) lie between the construction's neck level and the head ellipsoid."""
@@ -330,3 +347,20 @@ def test_human_gilet_scene_dresses(tmp_path):
     touched = {r["region"] for r in result.regions if r.get("mean_kPa", 0) > 0}
     assert touched and touched <= set(TORSO_REGIONS) | {"shoulders", "neck", "arms"}
     assert {"waist", "underbust", "upper_back"} <= touched
+
+
+@pytest.mark.slow
+def test_human_sleeve_against_laplace(tmp_path):
+    """demos/human_sleeve.toml: the sleeve dressed on the human's own left arm, followed along
+    its centreline as a scan's, completes with the spring released and penetration below 1 %
+    of the thickness; at the forearm and elbow the mean pressure in a ±1 cm band is Laplace's
+    n_θθ / R_eq for the level's ease and the arm's girth cut perpendicular to it (the checks of
+    the scan's limbs, tests/test_scan_makehuman.py; 15 % as there: the arm's axial curvature at
+    the elbow, its taper, and the sleeve's axial hold while the arm grows (the stuck hoop
+    state, +7 %) are what Laplace neglects). Measured (1 rank): forearm 2370 Pa against 2199 Pa
+    (+7.8 %), elbow 1933 against 1790 Pa (+8.0 %). The upper arm is not compared: the A-pose
+    arm hangs so close to the chest there that a plane normal to it cuts the torso too."""
+    from test_scan_makehuman import limb_garment_against_laplace
+
+    limb_garment_against_laplace("human_sleeve.toml", "arm_left", ("forearm", "elbow"), 0.15,
+                                 tmp_path)  # fmt: skip

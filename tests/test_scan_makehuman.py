@@ -285,6 +285,76 @@ def test_scan_gilet_scene_end_to_end(tmp_path):
     assert {"bust", "shoulders"} <= touched
 
 
+@pytest.mark.slow
+def test_dress_on_the_scan_body(scan):
+    """The dress is cut from the segmented body: armholes at the arm roots, the skirt hanging
+    clear of the arms and hands and around the legs, nowhere deep inside the body (libigl's
+    exact signed distance to each part's triangles as the reference)."""
+    import igl
+
+    from fenics_garment.geometry import garments as gm
+
+    body, _ = scan
+    d = gm.make_dress(body, h=0.03)  # check_garment ran inside: bounded, no fold
+    for side in ("left", "right"):
+        p = d.points[np.unique(d.edge_nodes[f"armhole_{side}"])]
+        # below the straps (whose inner edge, where the back scoop meets the armhole, is also
+        # named armhole: measured x = 0.07 m at 1.38–1.41 m), round the arm root
+        low = p[p[:, 2] < body.landmarks["armpit"] + 0.08]
+        assert np.all(np.abs(low[:, 0] - body.arm_cut[side]) < 0.05), side
+        assert p[:, 2].min() < body.landmarks["armpit"]
+
+    def dist_to(*parts: str) -> np.ndarray:
+        tri = body.triangles[np.isin(body.part, [PARTS[k] for k in parts])]
+        return igl.signed_distance(d.points, body.vertices, tri.astype(np.int64))[0]
+
+    # the MakeHuman knees stand wider apart than the hips: a cone from the hip section cut
+    # 21 mm into them (measured); widened around the legs, the skirt touches them only where
+    # the loft from the hip section passes the top of the thighs (measured −4.7 mm)
+    assert dist_to("leg_left", "leg_right").min() > -0.01
+    assert dist_to("arm_left", "arm_right").min() > 0.0  # measured 2.2 mm, at the armholes
+    hem = d.points[np.unique(d.edge_nodes["hem"])]
+    assert hem[:, 2].max() < body.landmarks["knee"] + 0.05  # a skirt down to the knees
+    # as the gilet, the loft between levels may dip into the breasts (measured 9.4 mm)
+    assert (
+        igl.signed_distance(d.points, body.vertices, body.triangles.astype(np.int64))[0].min()
+        > -0.02
+    )
+
+
+@pytest.mark.slow
+def test_scan_dress_scene_end_to_end(tmp_path):
+    """demos/scan_dress.toml dresses on the MakeHuman body (about 7 min of CPU on one core):
+    the run completes with the spring released and every result check passed, and the body
+    carries the dress's weight ρ h A g, A the pattern's area summed here over its triangles
+    (the fabric's density and thickness from its data, materials.py): the vertical reaction
+    is the weight, the horizontal one vanishes. The dress presses on the torso and, where the
+    skirt rests on them, the thighs and knees: never on the arms, hands, head or ankles."""
+    from fenics_garment.materials import fabric
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import run
+
+    scene = config.load(Path(__file__).resolve().parents[1] / "demos" / "scan_dress.toml")
+    result = run(scene, tmp_path, quiet=True)
+    s = result.summary
+    assert result.completed and result.report.final_regularisation == 0.0
+    assert s["checks_passed"] and s["max_penetration_over_thickness"] < 0.01
+    g = result.built.garment
+    x, t = g.points, g.triangles()
+    area = 0.5 * np.linalg.norm(np.cross(x[t[:, 1]] - x[t[:, 0]], x[t[:, 2]] - x[t[:, 0]]),
+                                axis=1).sum()  # fmt: skip
+    f = fabric("cotton")
+    weight = f.density * f.thickness * area * 9.80665
+    reaction = np.array(s["forces_N"]["reaction"])
+    print(f"pattern {area:.4f} m², weight {weight:.4f} N, reaction {reaction} N")
+    # 2 %: the pattern's flat triangles against the curved mesh the load acts on (+0.2 %)
+    assert reaction[2] == pytest.approx(weight, rel=2e-2)
+    assert np.hypot(reaction[0], reaction[1]) < 0.01 * weight
+    touched = {r["region"] for r in result.regions if r.get("mean_kPa", 0) > 0}
+    assert "waist" in touched and not touched & {"arms", "head", "neck", "ankles"}
+    assert touched <= set(TORSO_REGIONS) | {"shoulders", "thighs", "knees", "calves"}
+
+
 # Limb joints against the rig (measured: left and right alike, the mesh is symmetric). Offsets
 # are along the limb's own axis at the landmark, + towards the tip; tolerances name the anatomy.
 LIMB_JOINTS = {
@@ -363,11 +433,20 @@ LIMB_SCENES = {
 }
 
 
-#: Known failure: the scan stocking's ankle band is +28 % from Laplace (3749 against 2920 Pa,
-#: measured 2026-12-03 with the spring anchored at the start; +11.7 % before the stick penalty
-#: became the skin's G/depth). The scan sleeve passes again since the dressing spring is
-#: anchored at the start (forearm +0.5 %, elbow +3.2 %). Open in issue 17.
-_LIMB_XFAIL = pytest.mark.xfail(reason="scan stocking: ankle band +28 % from Laplace", strict=False)
+#: Known failure: the scan stocking's ankle band is +29 % from Laplace (3760 against 2920 Pa,
+#: 2026-12-04; calf +22 %, knee +15 %). Diagnosed so far (README, "Your own body scan"):
+#: * fixed: the stocking lofted through its 6 levels alone was not at the levels' ease between
+#:   them (−8 % at the ankle, −0.6 % half-way to the calf, −9 % in the ankle band); it is now
+#:   lofted through the leg's own sections every 2 cm (garments._follow_the_limb), its ease
+#:   within 0.5 % of the graduation everywhere, and the pressure follows Laplace cut by cut
+#:   (±15 % scatter) from 5 cm above the ankle to the welt;
+#: * the calf and knee excess is the reference's: the spring anchored at the start holds the
+#:   stocking axially while the leg grows (the stuck hoop state, tube_pressure(stuck=True):
+#:   +7.4 % / +8.6 %), and the smooth contact surface's girth is +0.8 % / +0.2 % over the
+#:   faceted cut (+10 % / +3 % of pressure at −8 % / −6 % ease);
+#: * not explained: the ankle's peak (4290 Pa, 1.35 × the local Laplace) on the narrowest
+#:   section, 1.2 cm from the hem, where the girth dips 1.5 % between the heel and the calf.
+_LIMB_XFAIL = pytest.mark.xfail(reason="scan stocking: ankle band +29 % from Laplace", strict=False)
 _LIMB_MARKS = {"scan_stocking.toml": [_LIMB_XFAIL]}
 
 
@@ -382,11 +461,19 @@ def test_limb_garment_on_the_scan_against_laplace(scene_file, tmp_path):
     and the body's girth *cut here* perpendicular to the limb (compression.laplace_pressure:
     the free-end hoop force of the fabric's own stiffness; the limb's axial curvature, its
     taper and the friction left after dressing are what the tolerance is for)."""
+    limb_name, levels, tol = LIMB_SCENES[scene_file]
+    limb_garment_against_laplace(scene_file, limb_name, levels, tol, tmp_path)
+
+
+def limb_garment_against_laplace(
+    scene_file: str, limb_name: str, levels: tuple[str, ...], tol: float, tmp_path: Path
+) -> None:
+    """Dress the demo ``scene_file`` and compare its band pressures with Laplace's law at
+    ``levels`` (the checks of :func:`test_limb_garment_on_the_scan_against_laplace`)."""
     from fenics_garment import compression as cp
     from fenics_garment.scene import config
     from fenics_garment.scene.run import run
 
-    limb_name, levels, tol = LIMB_SCENES[scene_file]
     scene = config.load(Path(__file__).resolve().parents[1] / "demos" / scene_file)
     result = run(scene, tmp_path, quiet=True)
     assert result.completed and result.report.final_regularisation == 0.0

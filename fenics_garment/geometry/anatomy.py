@@ -45,7 +45,7 @@ from scipy.sparse.csgraph import connected_components
 
 from . import sections as sec
 from .errors import ScanError
-from .limbs import Limb, analyse_limb
+from .limbs import KNEE_HEIGHT, Limb, analyse_limb
 from .measurements import LEG_LEVELS, TORSO_LEVELS
 
 Array = npt.NDArray[np.float64]
@@ -55,6 +55,9 @@ IArray = npt.NDArray[np.int64]
 ARM_JUMP = 0.02
 #: girth ratio over the neck girth where the head (jaw) begins
 HEAD_FLARE = 1.25
+#: a calf is a widest leg girth this much above the girth at the top of its range (below the
+#: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
+CALF_BULGE = 1.01
 #: landmark levels a scene may override (heights in metres above the floor)
 LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
@@ -352,11 +355,18 @@ def torso_levels(girth, crotch: float, armpit: float, shoulder: float, H: float)
 
 
 def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
-    """Left leg (+x): calf = widest girth at 12–30 % of the stature; knee = the middle of the
+    """Left leg (+x): calf = widest girth from 12 % of the stature to 2 % below the
+    proportional knee height (:data:`~.limbs.KNEE_HEIGHT` × stature); knee = the middle of the
     narrow stretch between calf and crotch (girth within 2 % of its minimum there: a smooth
     knee has a plateau, not a sharp minimum); ankle = narrowest girth between 3 % of the stature
     and the calf (ISO 8559-1: the minimum girth above the malleoli); thigh 3.5 % of the stature
-    under the crotch."""
+    under the crotch.
+
+    A leg without a calf — its widest girth in the calf's range at the top of the range, the
+    leg tapering all the way down, as the human mannequin's lofted leg (knee girth 0.37 m over
+    a 0.35 m calf) — has no narrowing to mark the knee: the knee is then the proportional
+    height, and the calf the widest girth 2 % of the stature below it. (The stature is the
+    body's top above the floor: on a headless scan the proportional height falls short.)"""
     zl = np.linspace(0.02 * H, crotch - 0.01 * H, 90)
     leg = {}
     for z in zl:
@@ -371,11 +381,16 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
             raise ScanError(f"no leg section between {lo:.3f} and {hi:.3f} m")
         return c
 
-    calf = max(within(0.12 * H, 0.30 * H), key=leg.get)
-    above = within(calf + 0.02 * H, crotch - 0.05 * H)
-    g_min = min(leg[z] for z in above)
-    narrow = [z for z in above if leg[z] <= 1.02 * g_min]
-    knee = 0.5 * (narrow[0] + narrow[-1])
+    z_knee = KNEE_HEIGHT * H
+    calf_range = within(0.12 * H, z_knee - 0.02 * H)
+    calf = max(calf_range, key=leg.get)
+    if leg[calf] > CALF_BULGE * leg[calf_range[-1]]:
+        above = within(calf + 0.02 * H, crotch - 0.05 * H)
+        g_min = min(leg[z] for z in above)
+        narrow = [z for z in above if leg[z] <= 1.02 * g_min]
+        knee = 0.5 * (narrow[0] + narrow[-1])
+    else:
+        knee = z_knee
     ankle = min(within(0.03 * H, calf - 0.03 * H), key=leg.get)
     return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
 

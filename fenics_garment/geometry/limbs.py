@@ -14,13 +14,15 @@ its arms 47° at the elbow):
    centroid moves the station. Two rounds of this converge (the stations move < 1 mm).
 3. **Joints**, as arc lengths ``s`` from the root:
 
-   * elbow, knee: the sharpest bend of the centreline (angle between chords ``BEND_CHORD``
-     behind and ahead) in the joint's range — between 25 and 75 % of the way from the root to
-     the wrist; between 15 % of the way to the ankle and the calf;
+   * elbow: the sharpest bend of the centreline (angle between chords ``BEND_CHORD`` behind
+     and ahead) between 25 and 75 % of the way from the root to the wrist;
+   * knee: the sharpest bend within ``KNEE_WINDOW`` of the proportional knee height
+     (``KNEE_HEIGHT`` × stature), or that height on a leg that does not bend there
+     (:func:`knee_on_the_leg`);
    * wrist, ankle: the narrowest section before the hand (foot) widens — the minimum girth in
      the distal half of the arm (45–85 % of the leg): ISO 8559-1 measures wrist and ankle
      girths at their narrowest, just above the wrist bones / malleoli;
-   * calf: the widest section between 45 and 90 % of the way to the ankle;
+   * calf: the widest section from 4 cm below the knee to 90 % of the way to the ankle;
    * forearm: half-way between elbow and wrist (the parametric arm's convention, 12 of 24 cm);
    * upper arm, thigh: ``ROOT_CLEARANCE`` × stature beyond the first station from which every
      section is the limb's own closed loop (clear of the torso; the thigh of the horizontal
@@ -62,6 +64,15 @@ ROOT_CLEARANCE = 0.035
 FINE = 0.002
 #: Fourier harmonics kept in a limb's level sections (:func:`smooth_section`)
 SECTION_HARMONICS = 12
+#: the knee joint's height over the stature: 0.285 (Drillis & Contini 1966, the segment
+#: proportions of D. A. Winter, *Biomechanics and Motor Control of Human Movement*, 4th ed.,
+#: Wiley 2009, fig. 4.1); MakeHuman's rig knee lies at 0.268 of its stature, the human
+#: mannequin's is built at 0.285 (measurements.Measurements.knee_height)
+KNEE_HEIGHT = 0.285
+#: the knee is looked for this far [m] along the leg from its proportional height (MakeHuman:
+#: 2.8 cm between the two), and is the sharpest bend there if the leg bends by this much [°]
+KNEE_WINDOW = 0.05
+KNEE_BEND = 5.0
 #: the landmark levels of each limb kind, tip to root
 ARM_MARKS = ("wrist", "forearm", "elbow", "upper_arm")
 LEG_MARKS = ("ankle", "calf", "knee", "thigh")
@@ -90,6 +101,9 @@ class Limb:
     girth: Array
     marks: dict[str, float]
     sections: dict[str, Array] = field(default_factory=dict)
+    #: the body's vertices and the limb's own triangles, for sections anywhere (section_at)
+    vertices: Array | None = field(default=None, repr=False)
+    triangles: IArray | None = field(default=None, repr=False)
 
     @property
     def length(self) -> float:
@@ -126,6 +140,15 @@ class Limb:
 
             raise MissingRegion(level, tuple(self.sections))
         return self.landmarks[base], self.sections[base]
+
+    def section_at(self, z: float) -> Array | None:
+        """The limb's own smoothed tape section at z' = ``z`` in its station's frame (as the
+        levels' sections), or None where the plane meets more than the limb."""
+        if self.vertices is None or self.triangles is None:
+            return None
+        c, t, e1, e2 = (x[0] for x in self.frame_at(self.length - z))
+        p = own_section(self.vertices, self.triangles, c, t, e1, e2)
+        return None if p is None else smooth_section(sec.convex_hull(p))
 
     def to_world(self, x: Array) -> Array:
         """Straightened coordinates (x', y', z') -> points on the limb: C(s) + x' e1 + y' e2."""
@@ -326,30 +349,53 @@ def arm_marks(s: Array, c: Array, girth: Array, stature: float, name: str) -> di
     return {"upper_arm": upper, "elbow": elbow, "forearm": 0.5 * (elbow + wrist), "wrist": wrist}
 
 
-def leg_marks(s: Array, c: Array, girth: Array, stature: float, name: str) -> dict[str, float]:
-    """Thigh, knee, calf, ankle of a leg (module doc, step 3)."""
+def leg_marks(
+    s: Array, c: Array, girth: Array, stature: float, name: str, top: float | None = None
+) -> dict[str, float]:
+    """Thigh, knee, calf, ankle of a leg (module doc, step 3). ``top``: the crown's height
+    above the floor (z = 0), for the knee's proportional height (default: ``stature``)."""
     L = s[-1]
     ankle = _pick(s, girth, 0.45 * L, 0.85 * L, np.nanargmin, "ankle (narrowest section)", name)
     root = _free_root(s, girth, name)
     span = ankle - root
-    calf = _pick(s, girth, root + 0.45 * span, root + 0.9 * span, np.nanargmax,
+    knee = knee_on_the_leg(s, c, KNEE_HEIGHT * (stature if top is None else top), root, ankle)
+    calf = _pick(s, girth, knee + 0.04, root + 0.9 * span, np.nanargmax,
                  "calf (widest section)", name)  # fmt: skip
-    knee = _pick(s, bend(s, c), root + 0.15 * span, calf - 0.04, np.nanargmax,
-                 "knee (sharpest bend)", name)  # fmt: skip
     thigh = root + ROOT_CLEARANCE * stature
     if not thigh < knee:
         raise ScanError(f"{name}: the thigh level is not above the knee")
     return {"thigh": thigh, "knee": knee, "calf": calf, "ankle": ankle}
 
 
+def knee_on_the_leg(s: Array, c: Array, z_knee: float, root: float, ankle: float) -> float:
+    """The knee's arc length: the sharpest bend of the centreline within ``KNEE_WINDOW`` of the
+    station at the proportional knee height ``z_knee``, if the leg bends there by at least
+    ``KNEE_BEND`` (a real leg); else that station (a straight lofted leg: nothing marks its
+    knee but the proportion).
+
+    The bend alone is not enough: the calf's bulge bends the centreline as much as the knee
+    does (MakeHuman: 14.7° at the calf, 13.5° at the knee), and a leg lofted straight through
+    its sections does not bend at all (the human mannequin: ≤ 2.6° along the whole leg)."""
+    inside = (s > root) & (s < ankle)
+    if not inside.any():
+        return float(0.5 * (root + ankle))
+    i0 = np.flatnonzero(inside)[np.argmin(np.abs(c[inside, 2] - z_knee))]
+    ang = bend(s, c)
+    near = np.flatnonzero(np.abs(s - s[i0]) <= KNEE_WINDOW)
+    j = near[np.argmax(ang[near])]
+    return float(s[j] if ang[j] >= KNEE_BEND else s[i0])
+
+
 def analyse_limb(v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str) -> Limb:
     """Centreline, girths, joints and level sections of one limb (module doc)."""
     s, c, tan, e1, e2, girth = centreline(v, t, mine)
     stature = float(np.ptp(v[:, 2]))
-    find = arm_marks if name.startswith("arm") else leg_marks
-    marks = find(s, c, girth, stature, name)
-    limb = Limb(name, s, c, tan, e1, e2, girth, marks)
+    if name.startswith("arm"):
+        marks = arm_marks(s, c, girth, stature, name)
+    else:
+        marks = leg_marks(s, c, girth, stature, name, top=float(v[:, 2].max()))
     lt = t[mine]
+    limb = Limb(name, s, c, tan, e1, e2, girth, marks, vertices=v, triangles=lt)
     for level, sl in marks.items():
         cc, tt, a, b = (x[0] for x in limb.frame_at(sl))
         p = own_section(v, lt, cc, tt, a, b)
