@@ -197,8 +197,8 @@ def _ring_centroid(v: Array, lt: IArray, f: Array, level: float) -> Array | None
     ends = []
     for i, j in ((0, 1), (1, 2), (2, 0)):
         crossed = above[:, i] != above[:, j]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            s = (level - fa[:, i]) / (fa[:, j] - fa[:, i])
+        df = np.where(crossed, fa[:, j] - fa[:, i], 1.0)  # uncrossed edges: no division
+        s = np.where(crossed, (level - fa[:, i]) / df, 0.0)
         p = v[tri[:, i]] + s[:, None] * (v[tri[:, j]] - v[tri[:, i]])
         ends.append(np.where(crossed[:, None], p, np.nan))
     ends_a = np.stack(ends, axis=1)  # (m, 3 edges, 3): two crossed edges per triangle
