@@ -127,7 +127,12 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
              "times are the fastest of the repeats on a shared 2-core machine; `jit` is the "
              "form compilation or cache load inside the wall time; plots use the wall time "
              "without JIT.", ""]  # fmt: skip
+    from benchmarks.targets import markdown as targets_markdown
+
+    parts += ["## targets", "", targets_markdown(), ""]
     for name, d in data.items():
+        if name == "targets":  # its records feed the section above
+            continue
         recs = d.get("runs", [])
         meta = d.get("meta", {})
         parts += [f"## {name}", ""]
