@@ -63,13 +63,14 @@ def above_tolerance(r: dict) -> bool:
 
 def _known(stem: str) -> list[dict]:
     """Completed earlier runs of ``stem`` on the current schedule and release (convergence and
-    sweep; a record from before the release was recorded is run again)."""
+    sweep; a record from before the release was recorded is run again, and so is a run that
+    ended above the penetration tolerance or stalled)."""
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
     want = convergence.schedule_of(stem, "default")
     release = scene_bench.release_settings()
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
-            if r.get("status") == "ok" and r.get("schedule") == want
+            if r.get("status") == "ok" and r.get("completed") and r.get("schedule") == want
             and r.get("release") == release
             and r.get("variant", "default") == "default"]  # fmt: skip
 

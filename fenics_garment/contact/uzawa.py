@@ -52,6 +52,8 @@ def max_penetration(state: ContactState) -> float:
 STIFFEN_FACTOR, SUFFICIENT_DECREASE, MAX_STIFFEN = 10.0, 0.25, 3
 #: The raise tried instead when a ×STIFFEN_FACTOR raise made Newton fail.
 SMALL_RAISE = STIFFEN_FACTOR**0.5
+#: Failed passes put back and tried again, in all (they do not count as multiplier updates).
+MAX_RECOVERIES = MAX_STIFFEN + 2
 
 #: Largest observed contraction ρ of a point's penetration that :func:`update_multiplier`
 #: extrapolates (the step on λ is then at most 1/(1 − ρ) = 10× the plain Uzawa step).
@@ -129,7 +131,10 @@ def augmented_lagrangian(
     last_gap = None  # the gap of the last converged pass
     raises = 0
     last = None
-    for _ in range(max_updates + 1):
+    # Only converged passes count as updates; a failed pass is put back and tried again at most
+    # MAX_RECOVERIES times in all (each kind of recovery is itself bounded: one "plain step",
+    # one "smaller raise" per raise, one "no raise").
+    while len(report.penetration) <= max_updates and len(report.recoveries) <= MAX_RECOVERIES:
         its, reason = solve()
         report.newton_iterations.append(its)
         report.kappa.append(kappa)

@@ -131,7 +131,7 @@ class PhysicsConfig:
     #: the stick penalty κ_T [Pa/m] of the friction law; 0: the skin's tangential stiffness
     #: G / body.tissue_depth with the seed paper's Table 1 tissue (scene.build.stick_stiffness)
     stick_stiffness: float = 0.0
-    max_updates: int = 8  # augmented-Lagrangian multiplier updates
+    max_updates: int = 16  # augmented-Lagrangian multiplier updates (the dress at 36.6 mm: 11)
     body_surface: str = "smooth"  # smooth (contact.smooth: C² IMLS distance) | faceted
     #: "module:function" or "file.py:function" (relative to the scene file): a hook called with
     #: the built problem before the solve, to replace laws or add terms (``scene.run``)

@@ -364,7 +364,7 @@ def dress(
             tol, max_updates = augmented_lagrangian
             with _final_solves(solver):
                 al = uzawa.augmented_lagrangian(
-                    st, float(contact.kappa.value), solver.solve, tol=tol,
+                    st, float(contact.kappa.value), _retrying(solver, q, st), tol=tol,
                     max_updates=max_updates, stiffen=contact.kappa, unknown=q,
                 )  # fmt: skip
             rep.al_updates = len(al.penetration) - 1
@@ -376,7 +376,7 @@ def dress(
                 raise DressingFailed(
                     rep, 0.0,
                     f"augmented Lagrangian: penetration {al.penetration[-1]:.3g} m not below "
-                    f"{tol:.3g} m after {len(al.newton_iterations) - 1} multiplier updates "
+                    f"{tol:.3g} m after {len(al.penetration) - 1} multiplier updates "
                     f"(penalty {al.kappa[-1]:.3g} Pa/m)" if al.penetration else
                     "augmented Lagrangian: the solve after the first multiplier update failed",
                 )  # fmt: skip
@@ -442,6 +442,32 @@ def _final_solves(solver: NonlinearSolver):
     finally:
         solver.set_max_it(max_it)
         solver.set_line_search(line_search)
+
+
+def _retrying(solver: NonlinearSolver, q, state) -> Callable[[], tuple[int, int]]:
+    """``solver.solve``, and after a failure the same solve once more from the same start with
+    the other line search (:data:`RETRY_LINE_SEARCH`), as a failed release solve is retried.
+    The dress at 31.8 mm: a multiplier-update pass failed with full Newton steps, then its plain
+    Uzawa step too, and the run ended at 5.1 % of h (it had reached 0.96 % with "l2")."""
+
+    def solve() -> tuple[int, int]:
+        start = q.x.array.copy()
+        its, reason = solver.solve()
+        if reason > 0:
+            return its, reason
+        q.x.array[:] = start
+        q.x.scatter_forward()
+        state.refresh()
+        kind = solver.problem.solver.getLineSearch().getType()
+        other = RETRY_LINE_SEARCH if kind != RETRY_LINE_SEARCH else RELEASE_LINE_SEARCH
+        previous = solver.set_line_search(other)
+        try:
+            again, reason = solver.solve()
+        finally:
+            solver.set_line_search(previous)
+        return its + again, reason
+
+    return solve
 
 
 def _release_loop(
