@@ -215,6 +215,8 @@ def _record(res, spec: dict, comm) -> dict:
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve
         "final_ratios": [(x["stage"], x["iterations"], x.get("final_ratios")) for x in steps],
         "failed_attempts": len(sm["dressing"]["failed_attempts"]),
+        # where they were: the shrink the solve aimed at (0: a release or multiplier solve)
+        "failures": sm["dressing"]["failed_attempts"],
         "max_pressure_kPa": sm["max_pressure_kPa"],
         "message": sm["message"],
         "contact_force_N": sm["contact_force_N"],
