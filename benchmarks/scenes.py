@@ -182,6 +182,9 @@ def _record(res, spec: dict, comm) -> dict:
         "solves": len(steps),
         "newton_its": sm["dressing"]["newton_iterations"],
         "its_per_solve": sm["dressing"]["newton_iterations"] / max(len(steps), 1),
+        # with the failed tries and the augmented Lagrangian's passes (their iterations per pass)
+        "all_newton_its": sm["dressing"].get("all_newton_iterations"),
+        "al_its": sm["dressing"].get("augmented_lagrangian_newton_iterations"),
         "wall_s": tm["total"],
         "jit_s": tm["jit"],
         "warm_wall_s": tm["total"] - tm["jit"],

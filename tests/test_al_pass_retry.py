@@ -93,3 +93,11 @@ def test_failed_passes_do_not_count_as_multiplier_updates(monkeypatch):
     assert len(al.penetration) == 6  # the first pass and 5 updates, besides the failed one
     assert al.penetration[-1] == pytest.approx(load / (spring + 1) * (spring / (spring + 1)) ** 5,
                                                rel=1e-9)  # fmt: skip
+
+
+def test_a_slow_contraction_close_to_the_tolerance_keeps_the_penalty():
+    """A raise only when the contraction would need more than PLAIN_UPDATES updates."""
+    assert uzawa.updates_to_reach(4.6e-6, 7.9e-6, 0.33) == pytest.approx(0.487, abs=1e-3)
+    assert uzawa.updates_to_reach(1e-6, 1e-4, 0.99) > uzawa.PLAIN_UPDATES
+    assert uzawa.updates_to_reach(1e-6, 1e-4, 1.0) == float("inf")
+    assert uzawa.updates_to_reach(1e-6, 1e-7, 0.9) == 0.0

@@ -88,11 +88,19 @@ class DressReport:
     al_penetration: list[float] = field(default_factory=list)
     al_kappa: list[float] = field(default_factory=list)  # the penalty of each pass [Pa/m]
     al_recoveries: list[str] = field(default_factory=list)  # after failed passes (uzawa)
+    al_iterations: list[int] = field(default_factory=list)  # Newton its of each pass (uzawa)
     completed: bool = False
 
     @property
     def newton_iterations(self) -> int:
+        """Newton iterations of the accepted dressing and release solves."""
         return sum(s.iterations for s in self.steps)
+
+    @property
+    def all_newton_iterations(self) -> int:
+        """Every Newton iteration of the dressing: the accepted solves, the failed tries and the
+        augmented Lagrangian's passes."""
+        return self.newton_iterations + sum(f[1] for f in self.failures) + sum(self.al_iterations)
 
     def as_dict(self) -> dict:
         return {
@@ -115,6 +123,8 @@ class DressReport:
             "augmented_lagrangian_penetration_m": self.al_penetration,
             "augmented_lagrangian_kappa_Pa_per_m": self.al_kappa,
             "augmented_lagrangian_recoveries": self.al_recoveries,
+            "augmented_lagrangian_newton_iterations": self.al_iterations,
+            "all_newton_iterations": self.all_newton_iterations,
             "completed": self.completed,
         }
 
@@ -371,6 +381,7 @@ def dress(
             rep.al_penetration = al.penetration
             rep.al_kappa = al.kappa
             rep.al_recoveries = al.recoveries
+            rep.al_iterations = al.newton_iterations
             pr.kappa = float(contact.kappa.value)
             if not al.converged:
                 raise DressingFailed(

@@ -490,8 +490,10 @@ def solve_stage(
         raise
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
-    say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations, "
-        f"{len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
+    al = report.al_iterations
+    passes = f" + {len(al)} multiplier passes ({sum(al)} its)" if al else ""
+    say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations"
+        f"{passes}, {len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
     _say_release(say, built, report, completed)
     if completed:
         frames.write()
