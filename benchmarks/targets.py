@@ -61,11 +61,20 @@ def at_default(sweep: dict, stem: str, scenes: dict | None = None) -> dict | Non
     benchmark's part "parallel" (which runs at the shipped mesh)."""
     runs = [r for r in _read("targets").get("demo_runs", []) if r.get("stem") == stem]
     if runs:  # measured for this table, at the shipped mesh, one after the other
-        return runs[-1] if runs[-1].get("status") == "ok" else None
+        ok = runs[-1].get("status") == "ok"
+        return dict(runs[-1], source="targets.json, measure") if ok else None
     runs = list(sweep.get("scenes", {}).get(stem, {}).get("runs", []))
     if stem == "cotton_gilet" and scenes:
-        runs += [r for r in scenes.get("runs", []) if r.get("part") == "parallel"]
-    runs = [r for r in runs if r.get("status") == "ok" and r.get("release") and r["ranks"] == 2]
+        runs += [
+            dict(r, source="scenes.json, parallel")
+            for r in scenes.get("runs", [])
+            if r.get("part") == "parallel"
+        ]
+    runs = [
+        dict({"source": "sweep.json"}, **r)
+        for r in runs
+        if r.get("status") == "ok" and r.get("release") and r["ranks"] == 2
+    ]
     if not runs:
         return None
     h = default_mesh(stem)
@@ -73,21 +82,33 @@ def at_default(sweep: dict, stem: str, scenes: dict | None = None) -> dict | Non
 
 
 def per_newton_ms(r: dict) -> dict[str, float]:
-    """Where the time of one Newton iteration goes in run ``r`` [ms]: assembly of the residual
-    and of the Jacobian, the linear solve, the contact hooks (gap, normal, search) and the rest."""
-    n = max(r["newton_its"], 1)
-    st = r.get("solver_time_s", {})
+    """Where the time of one Newton iteration goes in run ``r`` [ms], over every Newton iteration
+    of the run (accepted solves, failed tries, multiplier passes): residual and Jacobian assembly
+    (without the contact hooks), the linear solve, the contact hooks (gap, normal, search) and
+    the rest of the dressing (multiplier and anchor updates, pressure checks)."""
+    st = r["solver_time_s"]
+    n = max(st.get("newton_iterations", r["newton_its"]), 1)
+    hooks, jac_hooks = st.get("hooks", 0.0), st.get("jacobian_hooks", 0.0)
     parts = {
-        "residual": st.get("residual", 0.0),
-        "jacobian": st.get("jacobian", 0.0),
+        "residual": st["residual"] - (hooks - jac_hooks),
+        "Jacobian": st["jacobian"] - jac_hooks,
         "linear solve": r["linear_solver_s"],
-        "contact hooks": r["contact_hooks_s"],
+        "contact hooks": hooks,
     }
-    parts["rest of the dressing"] = max(r["dressing_s"] - sum(parts.values()), 0.0)
+    parts["rest of the dressing"] = max(r["dressing_s"] - st["solve"], 0.0)
     return {k: 1e3 * v / n for k, v in parts.items()}
 
 
-def _src(r: dict, what: str) -> str:
+def all_solves(r: dict) -> tuple[int, int]:
+    """(Newton iterations, solves) of the whole dressing: the accepted solves, the failed tries
+    and the augmented Lagrangian's passes (older records: the accepted solves only)."""
+    if r.get("all_newton_its") is None:
+        return r["newton_its"], r["solves"]
+    return r["all_newton_its"], r["solves"] + r["failed_attempts"] + len(r.get("al_its") or [])
+
+
+def _src(r: dict, what: str = "") -> str:
+    what = what if not r.get("source") else r["source"]
     load = (r.get("loadavg") or [math.nan])[0]
     return f"{what}, h = {1e3 * r['mesh_size']:.1f} mm, {r['dofs']} dofs, load {load:.1f}"
 
@@ -128,7 +149,7 @@ def rows() -> list[tuple[str, str, str, str, str]]:
         if r is None:
             continue
         ms = per_newton_ms(r)
-        asm = ms["residual"] + ms["jacobian"]
+        asm = ms["residual"] + ms["Jacobian"]
         ratio = asm / ms["linear solve"]
         out.append(
             (
@@ -142,13 +163,15 @@ def rows() -> list[tuple[str, str, str, str, str]]:
     for s, r in demo.items():
         if r is None:
             continue
-        ok = r["its_per_solve"] <= ITS_PER_SOLVE and r["failed_attempts"] == 0
+        its, solves = all_solves(r)
+        ok = its / solves <= ITS_PER_SOLVE and r["failed_attempts"] == 0
         out.append(
             (
-                f"3. {s}: Newton its per solve, failed tries",
+                f"3. {s}: Newton its per solve (all solves: dressing, release, failed tries, "
+                "multiplier passes), failed tries",
                 f"≤ {ITS_PER_SOLVE:.0f}, 0",
-                f"{r['its_per_solve']:.2f} ({r['newton_its']} / {r['solves']}), "
-                f"{r['failed_attempts']}",
+                f"{its / solves:.2f} ({its} / {solves}; accepted dressing and release solves "
+                f"{r['newton_its']} / {r['solves']}), {r['failed_attempts']}",
                 "yes" if ok else "no",
                 _src(r, "sweep.json"),
             )
