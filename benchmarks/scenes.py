@@ -265,21 +265,44 @@ def _max():
 # --------------------------------------------------------------------------------------------
 # parent: subprocesses
 # --------------------------------------------------------------------------------------------
-def spawn(spec: dict, ranks: int = 2, timeout: float = 1800) -> dict:
-    """One child run in ``mpiexec -n ranks``; failures become records."""
+def spawn_module(module: str, spec: dict, ranks: int, timeout: float) -> dict:
+    """Run ``python -m module --child SPEC OUT`` under ``mpiexec -n ranks`` (the child protocol of
+    :func:`child_main`); its record, or a failed record with the end of its output."""
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "rec.json"
-        cmd = [str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", "benchmarks.scenes",
+        cmd = [str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", module,
                "--child", json.dumps(spec), str(path)]  # fmt: skip
         t0 = time.perf_counter()
-        p = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
-                           timeout=timeout)  # fmt: skip
-        if p.returncode != 0 or not path.exists():
-            rec = {**spec, "ranks": ranks, "status": "failed", "loadavg": os.getloadavg(),
-                   "wall_s": time.perf_counter() - t0,
-                   "error": (p.stderr or p.stdout)[-600:]}  # fmt: skip
-        else:
-            rec = {**json.loads(path.read_text()), "status": "ok"}
+        try:
+            p = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
+                               timeout=timeout)  # fmt: skip
+            err = (p.stderr or p.stdout)[-600:] if p.returncode != 0 else ""
+        except subprocess.TimeoutExpired:
+            err = f"timed out after {timeout:.0f} s"
+        if not err and path.exists():
+            return {"status": "ok", **json.loads(path.read_text()),
+                    "wall_s_parent": time.perf_counter() - t0}  # fmt: skip
+        return {**spec, "ranks": ranks, "status": "failed", "loadavg": os.getloadavg(),
+                "wall_s": time.perf_counter() - t0,
+                "error": err or "no record written"}  # fmt: skip
+
+
+def child_main(argv: list[str], child) -> bool:
+    """The child side: ``--child SPEC OUT`` runs ``child(spec)`` on every rank and rank 0 writes
+    the record to OUT; False when ``argv`` is not a child's."""
+    if argv[:1] != ["--child"]:
+        return False
+    from fenics_garment._stack import MPI
+
+    rec = child(json.loads(argv[1]))
+    if MPI.COMM_WORLD.rank == 0:
+        Path(argv[2]).write_text(json.dumps(rec, default=float))
+    return True
+
+
+def spawn(spec: dict, ranks: int = 2, timeout: float = 1800) -> dict:
+    """One scene run (:func:`child`) in its own ``mpiexec -n ranks``; failures become records."""
+    rec = spawn_module("benchmarks.scenes", spec, ranks, timeout)
     if SINK is not None:
         SINK(rec)
     return rec
@@ -597,12 +620,7 @@ def stress(say) -> list[dict]:
 # --------------------------------------------------------------------------------------------
 def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
-    if argv[:1] == ["--child"]:
-        from fenics_garment._stack import MPI
-
-        rec = child(json.loads(argv[1]))
-        if MPI.COMM_WORLD.rank == 0:
-            Path(argv[2]).write_text(json.dumps(rec))
+    if child_main(argv, child):
         return 0
     mode = "quick" if "--quick" in argv else "default"
     parts = [a for a in argv if a in PARTS] or list(PARTS)

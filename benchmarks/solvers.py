@@ -41,15 +41,13 @@ from __future__ import annotations
 import json
 import math
 import os
-import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
 
 import numpy as np
 
-from benchmarks.scenes import MPIEXEC, ROOT, _env
+from benchmarks.scenes import child_main, spawn_module
 
 RESULTS = Path(__file__).resolve().parent / "results" / "solvers.json"
 SOLVERS = ("direct", "direct-blr", "gamg", "gamg-plain")
@@ -115,21 +113,10 @@ def child(spec: dict) -> dict:
 # parent
 # --------------------------------------------------------------------------------------------
 def spawn(spec: dict, ranks: int = 1, timeout: float = 3600) -> dict:
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "rec.json"
-        cmd = [str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", "benchmarks.solvers",
-               "--child", json.dumps(spec), str(path)]  # fmt: skip
-        t0 = time.perf_counter()
-        try:
-            p = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
-                               timeout=timeout)  # fmt: skip
-            err = (p.stderr or p.stdout)[-600:]
-        except subprocess.TimeoutExpired:
-            err = f"timed out after {timeout:.0f} s"
-        if path.exists():
-            return {**json.loads(path.read_text()), "wall_s": time.perf_counter() - t0}
-        return {**spec, "ranks": ranks, "status": "failed", "error": err,
-                "wall_s": time.perf_counter() - t0, "loadavg": os.getloadavg()}  # fmt: skip
+    """One solver run (:func:`child`) in its own ``mpiexec -n ranks``."""
+    rec = spawn_module("benchmarks.solvers", spec, ranks, timeout)
+    rec.setdefault("wall_s", rec.get("wall_s_parent"))  # the whole child, start-up included
+    return rec
 
 
 def plan(mode: str, sizes: list[int] | None, ranks: tuple[int, ...]) -> list[tuple[dict, int]]:
@@ -238,12 +225,7 @@ def markdown(d: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
-    if argv[:1] == ["--child"]:
-        from fenics_garment._stack import MPI
-
-        rec = child(json.loads(argv[1]))
-        if MPI.COMM_WORLD.rank == 0:
-            Path(argv[2]).write_text(json.dumps(rec))
+    if child_main(argv, child):
         return 0
     mode = "quick" if "--quick" in argv else "default"
     sizes = None

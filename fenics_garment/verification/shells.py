@@ -204,15 +204,14 @@ def pinched_cylinder(
     return _result("pinched-cylinder", model, solver, -w[0, 2], 1.82488e-5, t0, kirchhoff=kirchhoff)
 
 
-def pinched_hemisphere(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD) -> CaseResult:
-    """Hemisphere with an 18° hole, pinched by ±2 at the equator; quarter model.
+#: Radius of the open hemisphere of MacNeal & Harder and of Sze §3.4 (18° hole, t = 0.04).
+HEMISPHERE_R = 10.0
 
-    Reference: radial displacement at the load point 0.093 (MacNeal & Harder 1985, Table 1,
-    R=10, t=0.04, E=6.825e7, ν=0.3, F=2 per load, i.e. 1 on the quarter).
-    """
-    t0 = time.perf_counter()
-    R = 10.0
-    b0 = math.radians(18.0)
+
+def _open_hemisphere(n: int, element: str | None, comm) -> tuple[ShellModel, list]:
+    """The quarter of the hemisphere with an 18° hole (R = 10, t = 0.04, E = 6.825e7, ν = 0.3)
+    on an n×n mesh, with its two symmetry planes and the rigid-body fix at the hole's edge."""
+    R, b0 = HEMISPHERE_R, math.radians(18.0)
     mesh = parametric_surface_mesh(
         comm,
         lambda a, b: R * np.array([np.sin(b) * np.cos(a), np.sin(b) * np.sin(a), np.cos(b)]),
@@ -225,6 +224,18 @@ def pinched_hemisphere(n: int = 8, element: str | None = None, comm=MPI.COMM_WOR
         + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0, atol=1e-9), axis=0)
         + B.fix_point_dofs(model, (R * math.sin(b0), 0.0, R * math.cos(b0)), u=(2,))
     )
+    return model, bcs
+
+
+def pinched_hemisphere(n: int = 8, element: str | None = None, comm=MPI.COMM_WORLD) -> CaseResult:
+    """Hemisphere with an 18° hole, pinched by ±2 at the equator; quarter model.
+
+    Reference: radial displacement at the load point 0.093 (MacNeal & Harder 1985, Table 1,
+    R=10, t=0.04, E=6.825e7, ν=0.3, F=2 per load, i.e. 1 on the quarter).
+    """
+    t0 = time.perf_counter()
+    R = HEMISPHERE_R
+    model, bcs = _open_hemisphere(n, element, comm)
     F = 1.0 * LINEAR_SCALE
     loads = [PointLoad((R, 0.0, 0.0), (F, 0.0, 0.0)), PointLoad((0.0, R, 0.0), (0.0, -F, 0.0))]
     solver = _solve(model, bcs, 1, point_loads=loads)
@@ -422,26 +433,14 @@ def sze_hemisphere(
     from fenics_garment.points import PointEvaluator
 
     t0 = time.perf_counter()
-    R = 10.0
-    b0 = math.radians(18.0)
-    mesh = parametric_surface_mesh(
-        comm,
-        lambda a, b: R * np.array([np.sin(b) * np.cos(a), np.sin(b) * np.sin(a), np.cos(b)]),
-        (0, math.pi / 2), (b0, math.pi / 2), (n, n),
-    )  # fmt: skip
-    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 0, 1)),
-                       Isotropic(E=6.825e7, nu=0.3, thickness=0.04), element=element)  # fmt: skip
-    bcs = (
-        B.symmetry_plane(model, lambda x: np.isclose(x[1], 0.0, atol=1e-9), axis=1)
-        + B.symmetry_plane(model, lambda x: np.isclose(x[0], 0.0, atol=1e-9), axis=0)
-        + B.fix_point_dofs(model, (R * math.sin(b0), 0.0, R * math.cos(b0)), u=(2,))
-    )
+    R = HEMISPHERE_R
+    model, bcs = _open_hemisphere(n, element, comm)
     model.add_point_load((R, 0.0, 0.0), (200.0, 0.0, 0.0))
     model.add_point_load((0.0, R, 0.0), (0.0, -200.0, 0.0))
     solver = NonlinearSolver(model, bcs, petsc_options=None)
     model.load_factor.value = 0.0
     stepper = LoadStepper(solver, steps=steps_per_point)
-    probe = PointEvaluator(mesh, [[R, 0.0, 0.0], [0.0, R, 0.0]])
+    probe = PointEvaluator(model.geometry.mesh, [[R, 0.0, 0.0], [0.0, R, 0.0]])
     path = []
     for lam in HEMISPHERE_PATH[:, 0]:
         stepper.run(float(lam))
