@@ -114,7 +114,8 @@ OPTIONS: dict[str, Check] = {
     "snes_atol": NEWTON_ATOL,
     "snes_max_it": _integer(1, 1000),
     "snes_max_funcs": _integer(1, 1_000_000),
-    "snes_divergence_tolerance": _real(1.0, 1e300, extra=(-1.0,)),
+    # -3 (PETSC_UNLIMITED) switches the test off, -1 (PETSC_DETERMINE) is PETSc's default 1e4
+    "snes_divergence_tolerance": _real(1.0, 1e300, extra=(-1.0, -3.0)),
     "snes_linesearch_damping": _real(0.0, 1.0, lo_open=True),
     "snes_linesearch_max_it": _integer(1, 100),
     "snes_linesearch_maxstep": _real(0.0, 1e300, lo_open=True),
