@@ -81,7 +81,7 @@ def child(spec: dict) -> dict:
     if "per_turn" in spec:  # limbs: elements per turn of curvature (benchmarks/convergence.py)
         g = replace(g, per_turn=spec["per_turn"])
     phys = s.physics
-    if variant == "friction-off":
+    if "friction-off" in variant.split("+"):  # combines, e.g. friction-off+body-0.0075
         phys = replace(phys, friction=0.0)
     if variant == "gravity-off":
         phys = replace(phys, gravity=False)
@@ -213,6 +213,7 @@ def _record(res, spec: dict, comm) -> dict:
         "body_mesh_size": spec.get("body_mesh_size"),
         "per_turn": spec.get("per_turn"),
         "schedule": sm.get("dressing_schedule"),
+        "grow_steps": sm.get("dressing_steps"),
         # the release as the code ran it (benchmarks/sweep.py reuses runs of the same release)
         "release": release_settings(),
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve

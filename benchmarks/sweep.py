@@ -67,10 +67,10 @@ def _known(stem: str) -> list[dict]:
     ended above the penetration tolerance or stalled)."""
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
-    want = convergence.schedule_of(stem, "default")
     release = scene_bench.release_settings()
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
-            if r.get("status") == "ok" and r.get("completed") and r.get("schedule") == want
+            if r.get("status") == "ok" and r.get("completed")
+            and convergence.same_path(r, stem, "default")
             and r.get("release") == release
             and r.get("variant", "default") == "default"]  # fmt: skip
 

@@ -630,6 +630,7 @@ def _outputs(
         "terms": built.terms(),  # the laws and terms of the problem solved
         "dressing": report.as_dict(),
         "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
+        "dressing_steps": scene.dressing.steps,
         "time_s": times,
         "solver_time_s": {
             k: v for k, v in solver.timings.as_dict().items() if k not in ("steps", "cuts")
