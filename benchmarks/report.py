@@ -153,6 +153,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [sweep_markdown(d), ""]
             continue
+        if name == "mesh_noise":  # one scene on meshes of the same size (benchmarks/mesh_noise.py)
+            from benchmarks.mesh_noise import markdown as noise_markdown
+
+            parts += [noise_markdown(d), ""]
+            continue
         if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
             from benchmarks.smooth_body import markdown
 
