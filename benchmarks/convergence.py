@@ -113,10 +113,7 @@ LEGACY_GROW_STEPS = 4
 def same_path(rec: dict, stem: str, variant: str) -> bool:
     """Whether ``rec`` was dressed along the path a run of ``stem`` with ``variant`` takes now:
     the same schedule and number of grow steps (both change a frictional answer)."""
-    steps = config_steps(stem)
-    for part in variant.split("+"):
-        if part.startswith("steps-"):
-            steps = int(part[len("steps-") :])
+    steps = scene_bench.grow_steps(variant, config_steps(stem))
     return (rec.get("schedule") == schedule_of(stem, variant)
             and rec.get("grow_steps", LEGACY_GROW_STEPS) == steps)  # fmt: skip
 

@@ -29,6 +29,7 @@ import sys
 
 from benchmarks import convergence
 from benchmarks import scenes as scene_bench
+from benchmarks.targets import default_mesh
 
 RESULTS = convergence.RESULTS / "mesh_noise.json"
 #: Relative change of the target size between the meshes (module doc).
@@ -65,9 +66,9 @@ def analyse(recs: list[dict]) -> dict:
             vals = [r.get(f"regions_{s}_kPa", {}).get(name) for r in ok]
             if any(v is None for v in vals):
                 continue
-            m = statistics.fmean(vals)
-            row[s] = {"values": vals, "mean": m, "std": statistics.stdev(vals),
-                      "rel_std": statistics.stdev(vals) / m if m else float("nan"),
+            m, sd = statistics.fmean(vals), statistics.stdev(vals)
+            row[s] = {"values": vals, "mean": m, "std": sd,
+                      "rel_std": sd / m if m else float("nan"),
                       "rel_range": (max(vals) - min(vals)) / m if m else float("nan")}  # fmt: skip
         out["regions"][name] = row
     return out
@@ -104,8 +105,6 @@ def main(argv: list[str] | None = None) -> int:
     data = json.loads(RESULTS.read_text()) if RESULTS.exists() else {"scenes": {}}
     for name in names:
         stem, _, h = name.partition("@")
-        from benchmarks.targets import default_mesh
-
         size = float(h) if h else default_mesh(stem)
         key = f"{stem}@{size * 1e3:.1f}mm" + ("" if variant == "default" else f":{variant}")
         say(f"{key}: {n} meshes")

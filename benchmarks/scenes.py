@@ -63,6 +63,14 @@ def _env() -> dict:
 # --------------------------------------------------------------------------------------------
 # child: one scene run in this process (maybe under mpiexec)
 # --------------------------------------------------------------------------------------------
+def grow_steps(variant: str, scene_steps: int) -> int:
+    """The grow steps of a run with ``variant``: N for a ``steps-N`` part, else the scene's."""
+    for part in variant.split("+"):
+        if part.startswith("steps-"):
+            return int(part[len("steps-") :])
+    return scene_steps
+
+
 def child(spec: dict) -> dict:
     """Run the scene of ``spec`` (mesh_size, variant) and return its record (rank 0)."""
     import resource
@@ -89,7 +97,7 @@ def child(spec: dict) -> dict:
         s = replace(s, dressing=replace(s.dressing, schedule="adaptive"))
     for part in variant.split("+"):  # dressing-path studies (benchmarks/convergence.py)
         if part.startswith("steps-"):  # steps-N: N grow steps instead of the scene's
-            s = replace(s, dressing=replace(s.dressing, steps=int(part[len("steps-") :])))
+            s = replace(s, dressing=replace(s.dressing, steps=grow_steps(variant, 0)))
         if part == "friction-growing":  # friction from the first grow step
             s = replace(s, dressing=replace(s.dressing, friction_while_growing=True))
         if part == "anchor-start":  # the spring pulls towards the garment as placed
