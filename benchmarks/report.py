@@ -249,8 +249,15 @@ def scenes_section(d: dict) -> list[str]:
                 f"Gilet at h = {one.get('mesh_size')} ({one.get('dofs')} dofs): speed-up "
                 f"{_f(par.get('speedup_warm'))}× warm wall, {_f(par.get('speedup_dressing'))}× "
                 f"dressing; largest relative difference of the region mean pressures "
-                f"{_f(par.get('max_region_rel_diff'), '{:.1e}')}.", "",
-                SCALING_NOTE, ""]  # fmt: skip
+                f"{_f(par.get('max_region_rel_diff'), '{:.1e}')} (fastest 1-rank run against "
+                "fastest 2-rank run).", ""]  # fmt: skip
+        if par.get("rounds"):
+            out += ["| round | 1 rank [s] | 2 ranks [s] | speed-up | two 1-rank copies side by "
+                    "side: the machine's ceiling |", "|---|---|---|---|---|"]  # fmt: skip
+            out += [f"| {k + 1} | {r['one_s']:.1f} | {r['two_s']:.1f} | {r['speedup']:.2f}× | "
+                    f"{r['capacity']:.2f}× |" for k, r in enumerate(par["rounds"])]  # fmt: skip
+            out.append("")
+        out += [SCALING_NOTE, ""]
     sk = s.get("skips")
     if sk:
         out += ["### Skips on and off (gilet, 2 ranks)", "",
