@@ -15,7 +15,7 @@ and an error bar smaller than the noise is not credible.
 
 Writes ``benchmarks/results/mesh_noise.json`` (section "mesh_noise" of REPORT.md).
 
-    python -m benchmarks.mesh_noise [scene[@h] ...] [--n N] [--variant body-0.0075]
+    python -m benchmarks.mesh_noise [scene[@h] ...] [--n N] [--variant body-0.0075] [--delta δ]
 
 ``scene@h``: the garment size h [m] instead of the scene's own (e.g. ``cotton_gilet@0.0123744``).
 """
@@ -37,10 +37,10 @@ DELTA = 0.005
 STATS = ("p95", "sensor_p95", "mean")
 
 
-def run(stem: str, h: float, n: int, variant: str, say) -> list[dict]:
+def run(stem: str, h: float, n: int, variant: str, say, delta: float = DELTA) -> list[dict]:
     recs = []
     for k in range(n):
-        size = h * (1.0 + k * DELTA)
+        size = h * (1.0 + k * delta)
         spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": size,
                 "variant": variant}  # fmt: skip
         r = scene_bench.spawn(spec, timeout=3600)
@@ -60,6 +60,12 @@ def analyse(recs: list[dict]) -> dict:
     out: dict = {"meshes": len(ok), "dofs": [r["dofs"] for r in ok], "regions": {}}
     if len(ok) < 2:
         return out
+    # gmsh may mesh a garment identically at nearby sizes (the dress at 30 mm did, δ = 0.5 %):
+    # then nothing was measured, and a zero deviation must not read as "no noise"
+    same = {json.dumps(r.get("regions_p95_kPa"), sort_keys=True) for r in ok}
+    if len(same) == 1:
+        out["identical"] = True
+        return out
     for name in convergence.KEY_REGIONS:
         row = {}
         for s in STATS:
@@ -76,15 +82,20 @@ def analyse(recs: list[dict]) -> dict:
 
 def markdown(d: dict) -> str:
     out = ["Mesh noise (`python -m benchmarks.mesh_noise`): each scene on garment meshes "
-           f"whose target sizes differ by {DELTA:g} relative; per key region the values of "
+           "whose target sizes differ by a small relative step; per key region the values of "
            "each statistic [kPa], their standard deviation and range relative to their mean.",
            ""]  # fmt: skip
     for key, sc in d.get("scenes", {}).items():
         ana = sc.get("analysis", {})
         dofs = " / ".join(str(x) for x in ana.get("dofs", []))
-        out += [f"### {key}", "", f"{ana.get('meshes', 0)} meshes, dofs {dofs}.", "",
-                "| region | statistic | values | std | range |",
-                "|---|---|---|---|---|"]  # fmt: skip
+        delta = sc.get("delta", DELTA)
+        out += [f"### {key}", "", f"{ana.get('meshes', 0)} meshes (sizes h × (1 + k · {delta:g})), "
+                f"dofs {dofs}.", ""]  # fmt: skip
+        if ana.get("identical"):
+            out += ["gmsh made the same mesh at every size: no noise measured (use a larger "
+                    "`--delta`).", ""]  # fmt: skip
+            continue
+        out += ["| region | statistic | values | std | range |", "|---|---|---|---|---|"]
         for name, row in ana.get("regions", {}).items():
             for s, c in row.items():
                 vals = " / ".join(f"{v:.3f}" for v in c["values"])
@@ -98,7 +109,8 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     n = int(argv[argv.index("--n") + 1]) if "--n" in argv else 3
     variant = argv[argv.index("--variant") + 1] if "--variant" in argv else "default"
-    flags = {"--n", "--variant"}
+    delta = float(argv[argv.index("--delta") + 1]) if "--delta" in argv else DELTA
+    flags = {"--n", "--variant", "--delta"}
     names = [a for i, a in enumerate(argv) if not a.startswith("--")
              and (i == 0 or argv[i - 1] not in flags)] or ["cotton_gilet"]  # fmt: skip
     say = lambda *a: print(*a, flush=True)  # noqa: E731
@@ -108,9 +120,11 @@ def main(argv: list[str] | None = None) -> int:
         size = float(h) if h else default_mesh(stem)
         key = f"{stem}@{size * 1e3:.1f}mm" + ("" if variant == "default" else f":{variant}")
         say(f"{key}: {n} meshes")
-        recs = run(stem, size, n, variant, say)
-        data["scenes"][key] = {"runs": recs, "analysis": analyse(recs),
+        recs = run(stem, size, n, variant, say, delta)
+        data["scenes"][key] = {"runs": recs, "analysis": analyse(recs), "delta": delta,
                                "loadavg": os.getloadavg()}  # fmt: skip
+        if data["scenes"][key]["analysis"].get("identical"):
+            say(f"    the {n} meshes are identical: no noise measured; use a larger --delta")
         RESULTS.parent.mkdir(exist_ok=True)
         RESULTS.write_text(json.dumps(data, indent=1, default=float))
         for rname, row in data["scenes"][key]["analysis"].get("regions", {}).items():

@@ -107,6 +107,8 @@ def child(spec: dict) -> dict:
             s = replace(s, dressing=replace(s.dressing, release_ratio=float(part[8:])))
         if part.startswith("spring-"):  # spring-X: c₀ = X E h / L² instead of the scene's
             s = replace(s, dressing=replace(s.dressing, regularisation=float(part[7:])))
+        if part == "human":  # the body with arms and head (demos/human_gilet.toml)
+            s = replace(s, body=replace(s.body, human=True))
         if part.startswith("linear-"):  # linear-NAME: the scene's [solver] linear = NAME
             s = replace(s, solver=replace(s.solver, linear=part[len("linear-") :]))
         if part.startswith("body-"):  # body-X: body triangles of X m instead of the scene's
