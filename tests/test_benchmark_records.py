@@ -19,3 +19,25 @@ def test_records_made_before_grow_steps_were_recorded_count_as_four():
         assert convergence.same_path(old, stem, "default") == (
             convergence.config_steps(stem) == convergence.LEGACY_GROW_STEPS
         )
+
+
+def _noise_record(p95: float) -> dict:
+    regions = dict.fromkeys(convergence.KEY_REGIONS, p95)
+    return {"status": "ok", "completed": True, "dofs": 100, "regions_p95_kPa": regions,
+            "regions_sensor_p95_kPa": regions, "regions_mean_kPa": regions}  # fmt: skip
+
+
+def test_mesh_noise_of_identical_meshes_is_not_reported_as_zero():
+    from benchmarks import mesh_noise
+
+    ana = mesh_noise.analyse([_noise_record(0.5)] * 4)
+    assert ana["identical"] and not ana["regions"]
+
+
+def test_mesh_noise_is_the_sample_standard_deviation():
+    from benchmarks import mesh_noise
+
+    # values 0.9, 1.0, 1.1: mean 1, sample variance (0.01 + 0 + 0.01) / 2 = 0.01, std 0.1
+    ana = mesh_noise.analyse([_noise_record(v) for v in (0.9, 1.0, 1.1)])
+    c = ana["regions"]["waist"]["p95"]
+    assert abs(c["rel_std"] - 0.1) < 1e-12 and abs(c["rel_range"] - 0.2) < 1e-12
