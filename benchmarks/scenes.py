@@ -386,8 +386,6 @@ def parallel(mode: str, say, two: dict | None, rounds: int = 2) -> tuple[list[di
         out |= {"speedup_warm": a["warm_wall_s"] / b["warm_wall_s"],
                 "speedup_dressing": a["dressing_s"] / b["dressing_s"],
                 "max_region_rel_diff": _region_diff(a, b)}  # fmt: skip
-        if per_round:
-            out["capacity_two_copies"] = [r["capacity"] for r in per_round]
     return recs, out
 
 
