@@ -20,8 +20,9 @@ from __future__ import annotations
 import sys
 import time
 
-from benchmarks import contact, report, scenes, shells, solvers
+from benchmarks import check_args, contact, report, scenes, shells, solvers
 from fenics_garment._stack import MPI
+from fenics_garment.verification import shells as shell_cases
 
 SUITES = ("shells", "contact", "scenes", "solvers")
 DEFAULT_SUITES = ["shells", "contact"]
@@ -29,6 +30,10 @@ DEFAULT_SUITES = ["shells", "contact"]
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    bad = check_args(argv, __doc__, {"--quick", "--full"}, {"--repeat"},
+                     {*SUITES, *scenes.PARTS, *shell_cases.CASES})  # fmt: skip
+    if bad is not None:
+        return bad
     flags = [a for a in argv if a.startswith("--")]
     mode, repeat, names = shells.parse(argv)
     parts = [n for n in names if n in scenes.PARTS]

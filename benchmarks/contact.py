@@ -20,6 +20,7 @@ import json
 import time
 from pathlib import Path
 
+from benchmarks import check_args
 from fenics_garment._stack import MPI
 from fenics_garment.contact import uzawa
 from fenics_garment.materials import Isotropic
@@ -95,6 +96,9 @@ def search_share(n: tuple[int, int]) -> dict:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
+    bad = check_args(argv, __doc__, {"--quick"}, (), ())
+    if bad is not None:
+        return bad
     quick = "--quick" in argv
     comm = MPI.COMM_WORLD
     sizes = [(8, 4), (16, 8)] if quick else [(8, 4), (16, 8), (32, 16), (64, 32)]

@@ -45,6 +45,7 @@ import sys
 import time
 from pathlib import Path
 
+from benchmarks import check_args
 from benchmarks import scenes as scene_bench
 from fenics_garment.scene.error_bars import STATS, richardson_error, three_level
 
@@ -251,6 +252,9 @@ def plot(stem: str, ana: dict) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    bad = check_args(argv, __doc__, {"--quick", "--reuse"}, {"--levels", "--variant"}, LEVELS)
+    if bad is not None:
+        return bad
     quick = "--quick" in argv
     n_override = None
     if "--levels" in argv:

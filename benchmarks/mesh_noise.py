@@ -27,7 +27,7 @@ import os
 import statistics
 import sys
 
-from benchmarks import convergence
+from benchmarks import check_args, convergence
 from benchmarks import scenes as scene_bench
 from benchmarks.targets import default_mesh
 
@@ -107,6 +107,10 @@ def markdown(d: dict) -> str:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    bad = check_args(argv, __doc__, (), {"--n", "--variant", "--delta"},
+                     lambda a: a.partition("@")[0] in convergence.LEVELS)  # fmt: skip
+    if bad is not None:
+        return bad
     n = int(argv[argv.index("--n") + 1]) if "--n" in argv else 3
     variant = argv[argv.index("--variant") + 1] if "--variant" in argv else "default"
     delta = float(argv[argv.index("--delta") + 1]) if "--delta" in argv else DELTA

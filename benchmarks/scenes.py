@@ -40,6 +40,8 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import check_args
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
@@ -660,6 +662,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
     if child_main(argv, child):
         return 0
+    bad = check_args(argv, __doc__, {"--quick"}, (), PARTS)
+    if bad is not None:
+        return bad
     mode = "quick" if "--quick" in argv else "default"
     parts = [a for a in argv if a in PARTS] or list(PARTS)
     say = lambda *a: print(*a, flush=True)  # noqa: E731

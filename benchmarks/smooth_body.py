@@ -26,7 +26,7 @@ import sys
 
 import numpy as np
 
-from benchmarks import scenes
+from benchmarks import check_args, scenes
 
 RESULTS = scenes.RESULTS / "smooth_body.json"
 SCENES = {"cotton": scenes.GILET, "nylon": scenes.NYLON}
@@ -161,6 +161,11 @@ def underbust_row(folder: str, z: float = 1.215, half: float = 0.012) -> dict:
 
 
 def main(argv: list[str]) -> int:
+    if argv[:1] != ["row"]:  # row takes run folders
+        bad = check_args(argv, __doc__, {"--quick"}, {"--garment", "--surface"},
+                         {"table", "runs", "refine", *SCENES})  # fmt: skip
+        if bad is not None:
+            return bad
     if argv[:1] == ["table"]:  # print the stored record
         print(markdown(_load()))
         return 0

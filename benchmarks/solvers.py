@@ -47,6 +47,7 @@ from pathlib import Path
 
 import numpy as np
 
+from benchmarks import check_args
 from benchmarks.scenes import child_main, spawn_module
 
 RESULTS = Path(__file__).resolve().parent / "results" / "solvers.json"
@@ -227,6 +228,9 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
     if child_main(argv, child):
         return 0
+    bad = check_args(argv, __doc__, {"--quick", "--append"}, {"--sizes", "--ranks"}, ())
+    if bad is not None:
+        return bad
     mode = "quick" if "--quick" in argv else "default"
     sizes = None
     if "--sizes" in argv:

@@ -40,7 +40,7 @@ import os
 import sys
 import time
 
-from benchmarks import scenes
+from benchmarks import check_args, scenes
 
 RESULTS = scenes.RESULTS / "speed.json"
 MESH = 0.035  # the demo's garment mesh [m]
@@ -351,6 +351,9 @@ def _other_tables(data: dict) -> list[str]:
 def main(argv: list[str]) -> int:
     from fenics_garment._stack import MPI
 
+    bad = check_args(argv, __doc__, {"--quick"}, (), ("table", "scene", "kernels"))
+    if bad is not None:
+        return bad
     say = print if MPI.COMM_WORLD.rank == 0 else (lambda *a, **k: None)
     data = _load()
     if "table" in argv:

@@ -23,7 +23,7 @@ import math
 import os
 import sys
 
-from benchmarks import convergence
+from benchmarks import check_args, convergence
 from benchmarks import scenes as scene_bench
 
 RESULTS = convergence.RESULTS / "sweep.json"
@@ -145,6 +145,9 @@ def markdown(data: dict | None = None) -> str:
 
 
 def main(argv: list[str]) -> int:
+    bad = check_args(argv, __doc__, (), {"--n"}, {*SWEEP, "table"})
+    if bad is not None:
+        return bad
     if argv[:1] == ["table"]:
         print(markdown())
         return 0

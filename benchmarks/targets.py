@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from benchmarks import check_args
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
@@ -345,6 +347,9 @@ def measure(say=print) -> list[dict]:
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
+    bad = check_args(argv, __doc__, (), (), ("measure", "fresh-demo"))
+    if bad is not None:
+        return bad
     if argv[:1] == ["measure"]:
         data = _read("targets")
         data["demo_runs"] = measure()

@@ -41,3 +41,22 @@ def test_mesh_noise_is_the_sample_standard_deviation():
     ana = mesh_noise.analyse([_noise_record(v) for v in (0.9, 1.0, 1.1)])
     c = ana["regions"]["waist"]["p95"]
     assert abs(c["rel_std"] - 0.1) < 1e-12 and abs(c["rel_range"] - 0.2) < 1e-12
+
+
+def test_check_args_stops_a_mistyped_command_line(capsys):
+    """A wrong option or scene name is a one-line error (exit 2), ``--help`` prints the doc and
+    exits 0, and a valid line passes (``None``) — the convergence study once ran every scene
+    for an hour on ``--help``."""
+    from benchmarks import check_args
+
+    names = ("cotton_gilet", "tube")
+    assert check_args(["tube", "--levels", "3", "--reuse"], "doc", {"--reuse"}, {"--levels"},
+                      names) is None  # fmt: skip
+    assert check_args(["--help"], "the doc", names=names) == 0
+    assert "the doc" in capsys.readouterr().out
+    assert check_args(["--hlep"], "doc", {"--reuse"}) == 2
+    assert check_args(["cotton_gillet"], "doc", names=names) == 2
+    assert check_args(["--levels"], "doc", valued={"--levels"}) == 2
+    assert check_args(["tube@0.02"], "doc", names=lambda a: a.partition("@")[0] in names) is None
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 3 and all(line.startswith("error: ") for line in err)
