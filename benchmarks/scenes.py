@@ -45,6 +45,11 @@ from benchmarks import check_args
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 RESULTS = HERE / "results"
+#: where the scene subprocesses write their progress (not committed; the records are the results)
+LOGS = Path(
+    os.environ.get("FENICS_GARMENT_BENCH_LOGS")
+    or Path(tempfile.gettempdir()) / "fenics-garment-benchmarks"
+)
 GILET = ROOT / "demos" / "cotton_gilet.toml"
 PARTS = ("growth", "parallel", "skips", "peer", "release", "stress")
 SIZES = {"quick": [0.04, 0.03], "default": [0.03, 0.02, 0.014, 0.0085]}
@@ -138,7 +143,7 @@ def child(spec: dict) -> dict:
         search.reach_mask = lambda v, t, p, m: np.ones(len(t), dtype=bool)
     scene_build.build = patched
     out = Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))
-    res = run(s, out, quiet=True)
+    res = run(s, out, quiet=False)  # progress lines: the parent's log (spawn_module)
     rec = _record(res, spec, comm)
     if spec.get("rebuild"):
         rec["rebuild"] = _rebuild_cost(res.built, dolfinx, comm)
@@ -283,18 +288,27 @@ def _max():
 # --------------------------------------------------------------------------------------------
 def spawn_module(module: str, spec: dict, ranks: int, timeout: float) -> dict:
     """Run ``python -m module --child SPEC OUT`` under ``mpiexec -n ranks`` (the child protocol of
-    :func:`child_main`); its record, or a failed record with the end of its output."""
+    :func:`child_main`); its record, or a failed record with the end of its output.
+
+    The child's output (a scene's progress lines) goes to a log file in :data:`LOGS`, named on
+    the console before the run starts, so a run of many minutes can be followed (``tail -f``).
+    """
+    LOGS.mkdir(parents=True, exist_ok=True)
+    stamp = time.strftime("%Y%m%d-%H%M%S")
+    log = LOGS / f"{module.rsplit('.', 1)[-1]}-{stamp}-{os.getpid()}.log"
+    print(f"    progress: tail -f {log}", flush=True)
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "rec.json"
         cmd = [str(MPIEXEC), "-n", str(ranks), sys.executable, "-m", module,
                "--child", json.dumps(spec), str(path)]  # fmt: skip
         t0 = time.perf_counter()
-        try:
-            p = subprocess.run(cmd, cwd=ROOT, env=_env(), capture_output=True, text=True,
-                               timeout=timeout)  # fmt: skip
-            err = (p.stderr or p.stdout)[-600:] if p.returncode != 0 else ""
-        except subprocess.TimeoutExpired:
-            err = f"timed out after {timeout:.0f} s"
+        with log.open("w") as out:
+            try:
+                p = subprocess.run(cmd, cwd=ROOT, env=_env(), stdout=out,
+                                   stderr=subprocess.STDOUT, timeout=timeout)  # fmt: skip
+                err = "" if p.returncode == 0 else log.read_text()[-600:]
+            except subprocess.TimeoutExpired:
+                err = f"timed out after {timeout:.0f} s (its output: {log})"
         if not err and path.exists():
             return {"status": "ok", **json.loads(path.read_text()),
                     "wall_s_parent": time.perf_counter() - t0}  # fmt: skip
