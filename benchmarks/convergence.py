@@ -92,7 +92,7 @@ def run_scene(stem: str, h0: float, n: int, say, variant: str = "default",
         spec = {"scene": str(SCENES / f"{stem}.toml"), "mesh_size": h, "variant": variant}
         if stem in PER_TURN:
             spec["per_turn"] = round(PER_TURN[stem] / RATIO**k)
-        r = scene_bench.spawn(spec, timeout=10800)  # a fine level can take an hour
+        r = scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT)
         r["stem"] = stem
         recs.append(r)
         if r["status"] != "ok":

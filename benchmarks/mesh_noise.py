@@ -43,7 +43,7 @@ def run(stem: str, h: float, n: int, variant: str, say, delta: float = DELTA) ->
         size = h * (1.0 + k * delta)
         spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": size,
                 "variant": variant}  # fmt: skip
-        r = scene_bench.spawn(spec, timeout=3600)
+        r = scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT)
         recs.append(r)
         if r["status"] != "ok":
             say(f"  {stem} h = {size!r}: FAILED ({r.get('error', '')[-200:]!r})")

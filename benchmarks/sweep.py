@@ -85,7 +85,7 @@ def sweep(stem: str, say) -> list[dict]:
             r = same[-1]
         else:
             spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": h}
-            r = dict(scene_bench.spawn(spec, timeout=3600), stem=stem)
+            r = dict(scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT), stem=stem)
         recs.append(r)
         say(line(r) + ("  (from the record)" if same else ""))
         _store(stem, recs)
