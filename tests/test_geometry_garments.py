@@ -4,7 +4,9 @@ import numpy as np
 import pytest
 
 from fenics_garment.geometry import MeshSizes, MissingRegion, make_mannequin, measurements
+from fenics_garment.geometry.errors import GeometryError
 from fenics_garment.geometry.garments import (
+    EdgeRefinement,
     cylinder_body,
     intended_clearance,
     make_dress,
@@ -110,6 +112,29 @@ def test_dress_skirt_flare_and_tags(torso):
     hip_hull = torso.section("hip")[1]
     r_body = np.linalg.norm(hip_hull - hip_hull.mean(axis=0), axis=1).min()
     assert np.linalg.norm(c[skirt, :2] - hip_hull.mean(axis=0), axis=1).min() > r_body
+
+
+def _edge_lengths(gm, names):
+    pairs = np.concatenate([gm.edge_nodes[n] for n in names])
+    return np.linalg.norm(gm.points[pairs[:, 0]] - gm.points[pairs[:, 1]], axis=1)
+
+
+def test_edge_refinement_sizes(torso):
+    """Along the refined edges the segments are ratio × h (the size asked for), elsewhere h;
+    the rest of the garment far from them keeps the uniform mesh's cell count per area."""
+    h = 0.03
+    plain = make_gilet(torso, h=h)
+    fine = make_gilet(torso, h=h, refine=EdgeRefinement(("armhole",), ratio=0.25, band=0.03))
+    arm = ["armhole_left", "armhole_right"]
+    assert np.median(_edge_lengths(plain, arm)) == pytest.approx(h, rel=0.25)
+    assert np.median(_edge_lengths(fine, arm)) == pytest.approx(0.25 * h, rel=0.25)
+    # the hem is 0.3 m below the armholes: untouched
+    assert np.median(_edge_lengths(fine, ["hem"])) == pytest.approx(h, rel=0.25)
+    assert len(fine.cells) > 1.2 * len(plain.cells)
+    with pytest.raises(GeometryError, match="no edge named cuff"):
+        make_gilet(torso, h=h, refine=EdgeRefinement(("cuff",)))
+    with pytest.raises(ValueError, match="ratio"):
+        EdgeRefinement(ratio=0.0)
 
 
 def test_stocking_graduated_negative_ease(torso):

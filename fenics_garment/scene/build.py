@@ -69,6 +69,8 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
     kw: dict = {"h": g.mesh_size, "comm": comm, "order": geometry_order(scene)}
     if g.ease != {}:
         kw["ease"] = g.ease
+    if g.refine_edges:
+        kw["refine"] = gm.EdgeRefinement(tuple(g.refine_edges), g.edge_ratio, g.edge_band)
     if g.kind == "gilet":
         return gm.make_gilet(body, **kw)
     if g.kind == "dress":

@@ -111,6 +111,12 @@ class GarmentConfig:
     geometry: str = "auto"
     #: sleeve and stocking: elements per turn of the limb's curvature (at most mesh_size)
     per_turn: int = 24
+    #: smaller cells along these edges (names or name prefixes: "armhole", "neckline", "hem",
+    #: "*" for all; geometry.garments.EdgeRefinement): edge_ratio × mesh_size on them, growing
+    #: back to mesh_size over edge_band [m]
+    refine_edges: list[str] = field(default_factory=list)
+    edge_ratio: float = 0.25
+    edge_band: float = 0.04
 
 
 @dataclass(frozen=True)
@@ -450,6 +456,9 @@ def _check(s: Scene) -> None:
     _one_of(g.geometry, GEOMETRIES, src, "garment.geometry")
     _require(g.per_turn >= 8, src, "garment.per_turn", f"must be at least 8, got {g.per_turn}")
     _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
+    _require(0 < g.edge_ratio <= 1, src, "garment.edge_ratio",
+             f"is the edge cells' size / mesh_size, in (0, 1]; got {g.edge_ratio}")  # fmt: skip
+    _require(g.edge_band > 0, src, "garment.edge_band", f"must be positive [m], got {g.edge_band}")
     eases = g.ease.values() if isinstance(g.ease, dict) else [g.ease]
     for e in eases:
         _require(-0.5 < e < 1.0, src, "garment.ease", f"must lie in (-0.5, 1), got {e}")
