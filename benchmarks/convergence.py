@@ -29,6 +29,8 @@ the factor R per release solve (``release_ratio``) and ``spring-X`` the spring c
 (``regularisation``); any of these combine with ``+``. ``body-X`` meshes the body with
 triangles of X m instead of the scene's (e.g. ``body-0.0075``: the garment levels on a body finer
 than the finest garment, so the garment's part of the error is measured alone).
+``armhole-R`` refines the armholes to cells of R × h (``[garment] refine_edges``, ``edge_ratio``;
+a graded sequence: every level's edge cells shrink with its h).
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the

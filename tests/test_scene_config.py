@@ -47,6 +47,9 @@ def test_bundled_scenes_load(name):
         ("[garment]\nmesh_size = 0\n", "garment.mesh_size", "must be positive"),
         ("[garment]\nkind = 'tube'\n", "garment.kind", "needs a cylinder body"),
         ("[solver]\nlinear = 'gmag'\n", "solver.linear", "did you mean 'gamg'"),
+        ("[garment]\nrefine_edges = 'armhole'\n", "garment.refine_edges", "must be an array of strings"),
+        ("[garment]\nrefine_edges = ['armpit']\n", "garment.refine_edges", "no edge 'armpit'"),
+        ("[garment]\nedge_ratio = 1.5\n", "garment.edge_ratio", "in (0, 1]"),
     ],
 )  # fmt: skip
 def test_errors_name_file_and_key(tmp_path, text, key, words):
