@@ -162,7 +162,8 @@ def region_table(
     area: Array,
     sensor: Array | None = None,
 ) -> list[dict]:
-    """Per body region: contact area and mean / max / 95th-percentile pressure (kPa and mmHg).
+    """Per body region: contact area, normal force and mean / max / 95th-percentile pressure
+    (kPa and mmHg).
 
     Args:
         regions: region name -> number (``BodySurface.regions``).
@@ -188,7 +189,8 @@ def region_table(
                  ("max", float(pr.max()) if len(pr) else 0.0)]  # fmt: skip
         if sensor is not None:
             stats.append(("sensor_p95", weighted_percentile(sensor[sel], a, 95.0)))
-        row: dict = {"region": name, "contact_area_m2": float(a.sum())}
+        row: dict = {"region": name, "contact_area_m2": float(a.sum()),
+                     "force_N": float(np.sum(pr * a))}  # fmt: skip
         for key, val in stats:
             row[f"{key}_kPa"] = units.pa_to_kpa(val)
             row[f"{key}_mmHg"] = units.pa_to_mmhg(val)

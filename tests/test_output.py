@@ -47,6 +47,7 @@ def test_region_table_hand_computed():
     rows = {r["region"]: r for r in output.region_table(regions, region, p, a)}
     w = rows["waist"]
     assert w["contact_area_m2"] == pytest.approx(2e-4)
+    assert w["force_N"] == pytest.approx(0.1 + 0.3)  # 1000 Pa × 1 cm² + 3000 Pa × 1 cm²
     assert w["mean_kPa"] == pytest.approx(2.0)
     assert w["max_kPa"] == pytest.approx(3.0)
     assert w["mean_mmHg"] == pytest.approx(2000.0 / units.MMHG)
