@@ -203,6 +203,7 @@ def markdown(d: dict) -> str:
                 f"{r['newton_its']} | {r['failed_attempts']} | {r['completed']} | "
                 f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |"
             )
+        out += force_table(runs)
         for s, label in (("p95", "p95"), ("sensor_p95", "sensor p95 (2 cm sensor)")):
             rows = [(n, row[s]) for n, row in ana.get("regions", {}).items() if s in row]
             if not rows:
@@ -222,6 +223,22 @@ def markdown(d: dict) -> str:
         if (RESULTS / png).exists():
             out += [f"![convergence-{stem}]({png})", ""]
     return "\n".join(out)
+
+
+def force_table(runs: list[dict]) -> list[str]:
+    """Rows of the key regions' normal force [N] and contact area [cm²] per mesh (records that
+    keep them: ``regions_force_N``; "–" for older ones). A region whose force is steady while
+    its pressures rise is being pressed on a smaller area, not loaded more."""
+    if not any(r.get("regions_force_N") for r in runs):
+        return []
+    out = ["", "| region | force per mesh [N] | contact area per mesh [cm²] |", "|---|---|---|"]
+    for name in KEY_REGIONS:
+        force = [(r.get("regions_force_N") or {}).get(name) for r in runs]
+        area = [(r.get("regions_area_m2") or {}).get(name) for r in runs]
+        out.append(f"| {name} | " + " / ".join("–" if f is None else f"{f:.3f}" for f in force)
+                   + " | " + " / ".join("–" if a is None else f"{1e4 * a:.0f}" for a in area)
+                   + " |")  # fmt: skip
+    return out
 
 
 def plot(stem: str, ana: dict) -> None:
