@@ -164,6 +164,9 @@ def test_outputs_read_back(tube_run):
     assert summary["dressing"]["cuts"] >= 1
     rows = list(csv.DictReader((folder / "pressure_regions.csv").open()))
     assert float(rows[0]["mean_kPa"]) == pytest.approx(tube_run.regions[0]["mean_kPa"], rel=1e-5)
+    # every contact point lies on some body region: the regions' forces add up to the total
+    total = sum(r["force_N"] for r in summary["regions"])
+    assert total == pytest.approx(summary["contact_force_N"], rel=1e-6) and total > 0
     assert config.load(folder / "scene_used.toml") == replace(
         _scene(snes_max_it=5), source=str(folder / "scene_used.toml")
     )
