@@ -78,9 +78,9 @@ class EdgeRefinement:
     matches ``armhole_left`` and ``armhole_right``; ``"*"`` every named edge), growing linearly
     to h at the distance ``band`` [m] from them. With ``ratio`` fixed, a mesh sequence in h
     refines the edges and the rest alike (the convergence study's size ratio holds everywhere).
-    Where a free edge wraps a strongly curved part of the body (the dress's armholes over the
-    shoulder's rim) the pressure concentrates in a band a few centimetres wide that the uniform
-    mesh does not resolve.
+    Where an armhole passes over the body's side below the shoulder the pressure concentrates in
+    a patch of a few centimetres that uniform meshes do not resolve (README, "Armhole-graded
+    meshes": the dress's upper chest +7.2 % at its last uniform level, +1.7 % graded).
     """
 
     edges: tuple[str, ...] = ("armhole",)
