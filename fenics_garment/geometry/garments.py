@@ -93,10 +93,13 @@ class EdgeRefinement:
         if not self.band > 0:
             raise ValueError(f"edge refinement band must be > 0 m, got {self.band}")
 
+    def selects(self, name: str) -> bool:
+        """Whether the edge called ``name`` is refined (a name, its prefix or ``"*"``)."""
+        return any(e == "*" or (e and name.startswith(e)) for e in self.edges)
+
     def curves(self, named: dict[str, list[int]]) -> list[int]:
         """The gmsh curve tags of the refined edges among the ``named`` curves."""
-        return sorted({c for name, cs in named.items() for c in cs
-                       if any(e == "*" or name.startswith(e) for e in self.edges)})  # fmt: skip
+        return sorted({c for name, cs in named.items() for c in cs if self.selects(name)})
 
     def apply(self, g: Any, named: dict[str, list[int]]) -> None:
         """Set the size field of the model in the gmsh session ``g`` (before meshing; h is its

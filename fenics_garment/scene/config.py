@@ -470,9 +470,11 @@ def _check(s: Scene) -> None:
     _require(0 < g.edge_ratio <= 1, src, "garment.edge_ratio",
              f"is the edge cells' size / mesh_size, in (0, 1]; got {g.edge_ratio}")  # fmt: skip
     _require(g.edge_band > 0, src, "garment.edge_band", f"must be positive [m], got {g.edge_band}")
+    from fenics_garment.geometry.garments import EdgeRefinement
+
     names = EDGE_NAMES[g.kind]
     for e in g.refine_edges:
-        ok = e == "*" or any(n.startswith(e) for n in names) if e else False
+        ok = any(map(EdgeRefinement((e,)).selects, names))
         _require(ok, src, "garment.refine_edges",
                  f"a {g.kind} has no edge {e!r}; its edges: {', '.join(names)} (or a prefix, "
                  "e.g. 'armhole'; '*' for all)")  # fmt: skip
