@@ -701,6 +701,19 @@ class _TubeClassifier:
         return None
 
 
+_TORSO_EDGES = ("hem", "neckline", "armhole_left", "armhole_right", "side_seam_left",
+                "side_seam_right", "shoulder_seam_left", "shoulder_seam_right", "opening_left",
+                "opening_right")  # fmt: skip
+#: the edges each garment kind names (its classifier above: _TorsoClassifier, _TubeClassifier)
+EDGE_NAMES = {
+    "gilet": _TORSO_EDGES,
+    "dress": _TORSO_EDGES,
+    "tube": ("hem", "top", "seam_left", "seam_right"),
+    "sleeve": ("hem", "top", "seam_left", "seam_right"),
+    "stocking": ("hem", "welt", "seam_left", "seam_right"),
+}
+
+
 def _ease_dict(ease: float | dict[str, float], default: dict[str, float]) -> dict[str, float]:
     if isinstance(ease, dict):
         return {**default, **ease}

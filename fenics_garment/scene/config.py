@@ -216,17 +216,6 @@ class Scene:
 
 BODY_KINDS = ("mannequin", "scan", "cylinder", "arm")
 GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
-_TORSO_EDGES = ("hem", "neckline", "armhole_left", "armhole_right", "side_seam_left",
-                "side_seam_right", "shoulder_seam_left", "shoulder_seam_right", "opening_left",
-                "opening_right")  # fmt: skip
-#: the edges each garment kind names (geometry.garments: its classifiers)
-EDGE_NAMES = {
-    "gilet": _TORSO_EDGES,
-    "dress": _TORSO_EDGES,
-    "tube": ("hem", "top", "seam_left", "seam_right"),
-    "sleeve": ("hem", "top", "seam_left", "seam_right"),
-    "stocking": ("hem", "welt", "seam_left", "seam_right"),
-}
 #: The body kind each garment kind needs (the rest need a mannequin or a scan).
 GARMENT_BODY = {"tube": ("cylinder",), "sleeve": ("arm", "scan")}
 #: Levels that a per-level ease may name, per garment kind (others are not checked).
@@ -470,7 +459,7 @@ def _check(s: Scene) -> None:
     _require(0 < g.edge_ratio <= 1, src, "garment.edge_ratio",
              f"is the edge cells' size / mesh_size, in (0, 1]; got {g.edge_ratio}")  # fmt: skip
     _require(g.edge_band > 0, src, "garment.edge_band", f"must be positive [m], got {g.edge_band}")
-    from fenics_garment.geometry.garments import EdgeRefinement
+    from fenics_garment.geometry.garments import EDGE_NAMES, EdgeRefinement
 
     names = EDGE_NAMES[g.kind]
     for e in g.refine_edges:
