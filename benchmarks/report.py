@@ -158,6 +158,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [noise_markdown(d), ""]
             continue
+        if name == "estimators":  # error bars' coverage on synthetic data (estimators.py)
+            from benchmarks.estimators import markdown as estimators_markdown
+
+            parts += [estimators_markdown(d), ""]
+            continue
         if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
             from benchmarks.smooth_body import markdown
 
