@@ -34,7 +34,7 @@ from benchmarks.targets import default_mesh
 RESULTS = convergence.RESULTS / "mesh_noise.json"
 #: Relative change of the target size between the meshes (module doc).
 DELTA = 0.005
-STATS = ("p95", "sensor_p95", "mean")
+STATS = ("p95", "sensor_p95", "body_sensor_p95", "mean")
 
 
 def run(stem: str, h: float, n: int, variant: str, say, delta: float = DELTA) -> list[dict]:

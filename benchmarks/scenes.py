@@ -226,6 +226,9 @@ def _record(res, spec: dict, comm) -> dict:
         "regions_p95_kPa": {r["region"]: r["p95_kPa"] for r in sm["regions"]},
         "regions_max_kPa": {r["region"]: r["max_kPa"] for r in sm["regions"]},
         "regions_sensor_p95_kPa": {r["region"]: r["sensor_p95_kPa"] for r in sm["regions"]},
+        "regions_body_sensor_p95_kPa": {
+            r["region"]: r.get("body_sensor_p95_kPa") for r in sm["regions"]
+        },
         # contact area and normal force per region: where a constant total force goes
         "regions_area_m2": {r["region"]: r["contact_area_m2"] for r in sm["regions"]},
         "regions_force_N": {r["region"]: r.get("force_N") for r in sm["regions"]},

@@ -155,12 +155,39 @@ def sensor_pressure(centres: Array, x: Array, force: Array, area: Array, radius:
     return np.array([force[j].sum() / area[j].sum() for j in balls])
 
 
+def body_sensors(
+    centres: Array, region: npt.NDArray[np.int32], weight: Array, x: Array, force: Array,
+    area: Array, radius: float,
+) -> tuple[npt.NDArray[np.int32], Array, Array]:  # fmt: skip
+    """Sensors lying on the body: one centred at each body triangle's centre (``centres``, of
+    ``region`` and area ``weight``) with a garment point within ``radius``; its reading is
+    :func:`sensor_pressure`. Returns (region, reading [Pa], area [m²]) of the sensors that read
+    a pressure (> 0).
+
+    A sensor is placed on the skin, under the garment: the places it is read at do not move when
+    the garment mesh changes, so a percentile of the readings over a region samples the same
+    places on every garment mesh (the readings at the garment's contact points, ``sensor`` of
+    :func:`region_table`, sample wherever that mesh put its points).
+    """
+    from scipy.spatial import cKDTree
+
+    if len(x) == 0:
+        return region[:0], np.zeros(0), np.zeros(0)
+    near = np.all((centres >= x.min(axis=0) - radius) & (centres <= x.max(axis=0) + radius), 1)
+    near = np.flatnonzero(near)
+    balls = cKDTree(x).query_ball_point(centres[near], radius)
+    reading = np.array([force[j].sum() / area[j].sum() if j else 0.0 for j in balls])
+    on = near[reading > 0]
+    return region[on], reading[reading > 0], weight[on]
+
+
 def region_table(
     regions: dict[str, int],
     region: npt.NDArray[np.int32],
     p: Array,
     area: Array,
     sensor: Array | None = None,
+    body: tuple[npt.NDArray[np.int32], Array, Array] | None = None,
 ) -> list[dict]:
     """Per body region: contact area, normal force and mean / max / 95th-percentile pressure
     (kPa and mmHg).
@@ -173,6 +200,9 @@ def region_table(
         sensor: the reading of a pressure sensor centred at each contact point [Pa]
             (:func:`sensor_pressure`); gives the rows' ``sensor_p95`` (its area-weighted
             95th percentile over the region).
+        body: (region, reading [Pa], area [m²]) of sensors lying on the body
+            (:func:`body_sensors`); gives the rows' ``body_sensor_p95``, the area-weighted 95th
+            percentile of the readings of the region's sensors.
 
     Only points in contact (p > 0) count. Statistics are area weighted, so a region half covered
     reports the pressure where it is pressed, and its contact area separately. The garment-side
@@ -189,6 +219,9 @@ def region_table(
                  ("max", float(pr.max()) if len(pr) else 0.0)]  # fmt: skip
         if sensor is not None:
             stats.append(("sensor_p95", weighted_percentile(sensor[sel], a, 95.0)))
+        if body is not None:
+            on = body[0] == tag
+            stats.append(("body_sensor_p95", weighted_percentile(body[1][on], body[2][on], 95.0)))
         row: dict = {"region": name, "contact_area_m2": float(a.sum()),
                      "force_N": float(np.sum(pr * a))}  # fmt: skip
         for key, val in stats:

@@ -108,3 +108,31 @@ def test_region_table_sensor_p95_is_the_percentile_of_the_readings():
     (row,) = output.region_table(regions, region, p, a, sensor=np.full(100, 400.0))
     assert row["sensor_p95_kPa"] == pytest.approx(0.4)
     assert row["p95_kPa"] == pytest.approx(output.weighted_percentile(p, a, 95) / 1e3)
+
+
+def test_body_sensors_read_the_pressure_where_they_lie_and_only_under_a_pressed_garment():
+    # garment points on a 1 mm grid of the plane z = 0, pressure 1 kPa + 2 kPa/m · x for x < 0.03
+    # and 0 beyond; body "triangles" of two regions with centres on a 5 mm grid and area 1 cm²
+    h = 1e-3
+    g = np.arange(-50, 51) * h
+    x = np.array([[a, b, 0.0] for a in g for b in g])
+    a = np.full(len(x), h * h)
+    p = np.where(x[:, 0] < 0.03, 1000.0 + 2000.0 * x[:, 0], 0.0)
+    c = np.array([[u, v, 0.0] for u in np.arange(-0.1, 0.1001, 0.005) for v in (0.0, 0.02)])
+    region = np.where(c[:, 1] > 0.01, 2, 1).astype(np.int32)
+    weight = np.full(len(c), 1e-4)
+    radius = 10.5 * h
+    reg, reading, area = output.body_sensors(c, region, weight, x, p * a, a, radius)
+    # the pressed garment points span x = −0.05 … 0.029
+    kept = c[(c[:, 0] >= -0.05 - radius) & (c[:, 0] <= 0.029 + radius)]
+    # a sensor reads only where a pressed garment point lies within its radius
+    assert len(reading) == len(kept) and np.all(reading > 0) and np.all(area == 1e-4)
+    inside = (kept[:, 0] >= -0.05 + radius) & (kept[:, 0] <= 0.029 - radius)
+    lin = 1000.0 + 2000.0 * kept[:, 0]  # the mean of a linear field over a disc: its centre value
+    assert reading[inside] == pytest.approx(lin[inside], rel=1e-9)
+    assert set(reg.tolist()) == {1, 2}
+    (r1, _) = output.region_table({"a": 1, "b": 2}, np.array([1]), np.array([1.0]),
+                                   np.array([1.0]), body=(reg, reading, area))  # fmt: skip
+    assert r1["body_sensor_p95_kPa"] == pytest.approx(
+        output.weighted_percentile(reading[reg == 1], area[reg == 1], 95.0) / 1e3
+    )

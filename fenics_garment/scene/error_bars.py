@@ -35,7 +35,7 @@ from fenics_garment.scene import config
 #: Convergence rate assumed for the bars and the coarse level's mesh size ratio (module doc).
 RATE = 1.0
 RATIO = 2.0**0.5
-STATS = ("mean", "p95", "max", "sensor_p95")
+STATS = ("mean", "p95", "max", "sensor_p95", "body_sensor_p95")
 
 
 def richardson_error(fine: float, coarse: float, rate: float = RATE, ratio: float = RATIO) -> float:

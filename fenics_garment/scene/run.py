@@ -259,8 +259,9 @@ def _contact_measures(built) -> dict:
 
 def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     """(body region, pressure [Pa], deformed area [m²], sensor reading [Pa]) of every contact
-    point in contact, gathered on all ranks; the region is that of the closest body triangle,
-    the sensor reading :func:`output.sensor_pressure` with ``[output] sensor_diameter``."""
+    point in contact, gathered on all ranks, and the sensors lying on the body
+    (:func:`output.body_sensors`); the region is that of the closest body triangle, the sensor
+    reading :func:`output.sensor_pressure` with ``[output] sensor_diameter``."""
     st, c = built.contact.state, built.contact
     comm = built.model.geometry.mesh.comm
     p = c.pressure_values()
@@ -272,7 +273,12 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     region, p, a, x, on = (np.concatenate([q[k] for q in parts]) for k in range(5))
     radius = 0.5 * built.scene.output.sensor_diameter
     sensor = output.sensor_pressure(x[on], x, p * a, a, radius)
-    return region, p[on], a[on], sensor
+    b = built.body
+    tri = b.vertices[b.triangles]
+    centres = tri.mean(axis=1)
+    weight = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    body = output.body_sensors(centres, b.region, weight, x, p * a, a, radius)
+    return region, p[on], a[on], sensor, body
 
 
 def element_warning(variant) -> str | None:
