@@ -155,19 +155,26 @@ def sensor_pressure(centres: Array, x: Array, force: Array, area: Array, radius:
     return np.array([force[j].sum() / area[j].sum() for j in balls])
 
 
+#: Share of a body sensor's pad the garment must cover for the sensor to count (body_sensors).
+SENSOR_COVER = 0.5
+
+
 def body_sensors(
     centres: Array, region: npt.NDArray[np.int32], weight: Array, x: Array, force: Array,
     area: Array, radius: float,
 ) -> tuple[npt.NDArray[np.int32], Array, Array]:  # fmt: skip
     """Sensors lying on the body: one centred at each body triangle's centre (``centres``, of
-    ``region`` and area ``weight``) with a garment point within ``radius``; its reading is
-    :func:`sensor_pressure`. Returns (region, reading [Pa], area [m²]) of the sensors that read
-    a pressure (> 0).
+    ``region`` and area ``weight``) whose pad the garment covers (garment points of area
+    ≥ :data:`SENSOR_COVER` × π ``radius``² within ``radius``); its reading is
+    :func:`sensor_pressure`. Returns (region, reading [Pa], area [m²]) of the covered sensors
+    that read a pressure (> 0).
 
     A sensor is placed on the skin, under the garment: the places it is read at do not move when
     the garment mesh changes, so a percentile of the readings over a region samples the same
     places on every garment mesh (the readings at the garment's contact points, ``sensor`` of
-    :func:`region_table`, sample wherever that mesh put its points).
+    :func:`region_table`, sample wherever that mesh put its points). One that the garment covers
+    only in part — beside a hem or an armhole — would read the mean over the covered part alone,
+    as if its pad were that part, and is left out, as one would not place a sensor there.
     """
     from scipy.spatial import cKDTree
 
@@ -176,9 +183,10 @@ def body_sensors(
     near = np.all((centres >= x.min(axis=0) - radius) & (centres <= x.max(axis=0) + radius), 1)
     near = np.flatnonzero(near)
     balls = cKDTree(x).query_ball_point(centres[near], radius)
-    reading = np.array([force[j].sum() / area[j].sum() if j else 0.0 for j in balls])
-    on = near[reading > 0]
-    return region[on], reading[reading > 0], weight[on]
+    cover = np.array([area[j].sum() for j in balls])
+    reading = np.array([force[j].sum() for j in balls]) / np.where(cover > 0, cover, 1.0)
+    keep = (cover >= SENSOR_COVER * np.pi * radius**2) & (reading > 0)
+    return region[near[keep]], reading[keep], weight[near[keep]]
 
 
 def region_table(

@@ -123,9 +123,10 @@ def test_body_sensors_read_the_pressure_where_they_lie_and_only_under_a_pressed_
     weight = np.full(len(c), 1e-4)
     radius = 10.5 * h
     reg, reading, area = output.body_sensors(c, region, weight, x, p * a, a, radius)
-    # the pressed garment points span x = −0.05 … 0.029
-    kept = c[(c[:, 0] >= -0.05 - radius) & (c[:, 0] <= 0.029 + radius)]
-    # a sensor reads only where a pressed garment point lies within its radius
+    # the garment spans x = −0.05 … 0.05, its pressed points x = −0.05 … 0.029: a sensor counts
+    # where the garment covers at least half its pad (centre at x ≥ −0.05; the one at −0.055
+    # has garment points within its radius but is mostly bare) and a pressed point is within it
+    kept = c[(c[:, 0] >= -0.05) & (c[:, 0] <= 0.029 + radius)]
     assert len(reading) == len(kept) and np.all(reading > 0) and np.all(area == 1e-4)
     inside = (kept[:, 0] >= -0.05 + radius) & (kept[:, 0] <= 0.029 - radius)
     lin = 1000.0 + 2000.0 * kept[:, 0]  # the mean of a linear field over a disc: its centre value

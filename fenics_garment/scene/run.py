@@ -695,12 +695,13 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
 
 def _print_regions(say, regions: list[dict]) -> None:
     say(
-        f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6} {'sensor':>6}  kPa"
-        "   comfort (p95)   (sensor: p95 of a sensor's reading, [output] sensor_diameter)"
+        f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6} {'sensor':>6} "
+        f"{'skin':>6}  kPa   comfort (p95)   (sensor / skin: p95 of the reading of a sensor "
+        "of [output] sensor_diameter at the contact points / lying on the body)"
     )
     for r in regions:
         if r["contact_area_m2"] <= 0:
             continue
         say(f"  {r['region']:<12} {r['contact_area_m2'] * 1e4:7.0f}cm² {r['mean_kPa']:6.2f} "
-            f"{r['p95_kPa']:6.2f} {r['max_kPa']:6.2f} {r.get('sensor_p95_kPa', 0.0):6.2f}"
-            f"        {r['comfort']}")  # fmt: skip
+            f"{r['p95_kPa']:6.2f} {r['max_kPa']:6.2f} {r.get('sensor_p95_kPa', 0.0):6.2f} "
+            f"{r.get('body_sensor_p95_kPa', 0.0):6.2f}        {r['comfort']}")  # fmt: skip
