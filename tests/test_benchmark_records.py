@@ -1,5 +1,7 @@
 """The benchmarks reuse a stored run only if it was dressed along the scene's current path."""
 
+import pytest
+
 from benchmarks import convergence
 
 
@@ -60,3 +62,23 @@ def test_check_args_stops_a_mistyped_command_line(capsys):
     assert check_args(["tube@0.02"], "doc", names=lambda a: a.partition("@")[0] in names) is None
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 3 and all(line.startswith("error: ") for line in err)
+
+
+def test_the_least_squares_verdict_of_a_study_names_the_regions_within_the_target():
+    # five levels of p95 = 1 + C h² (exact): every key region's least-squares bar is 1.25 × its
+    # true error, 1.25 · C h_fine²; C is chosen so that the waist's true error at the finest mesh
+    # is 4 % (bar 5 %, not met) and every other region's 1 % (bar 1.25 %, met)
+    hs = convergence.sizes(0.035, 5)
+    runs = []
+    for h in hs:
+        vals = {n: 1.0 + (0.04 if n == "waist" else 0.01) * (h / hs[-1]) ** 2
+                for n in convergence.KEY_REGIONS}  # fmt: skip
+        runs.append({"status": "ok", "mesh_size": h, "dofs": 1, "completed": True,
+                     "max_penetration_over_thickness": 0.0, "regions_p95_kPa": vals,
+                     "regions_sensor_p95_kPa": vals})  # fmt: skip
+    ana = convergence.analyse(runs)
+    want = [n for n in convergence.KEY_REGIONS if n != "waist"]
+    assert ana["key_p95_least_squares_met"] == want
+    assert ana["key_sensor_p95_least_squares_met"] == want
+    ls = ana["regions"]["waist"]["p95"]["least_squares"]
+    assert ls["relative_error"][-1] == pytest.approx(1.25 * 0.04 / 1.04, rel=1e-3)
