@@ -38,6 +38,7 @@ from fenics_garment import output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
+from fenics_garment.geometry import surface
 from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.scene import build as scene_build
 from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight
@@ -274,9 +275,8 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     radius = 0.5 * built.scene.output.sensor_diameter
     sensor = output.sensor_pressure(x[on], x, p * a, a, radius)
     b = built.body
-    tri = b.vertices[b.triangles]
-    centres = tri.mean(axis=1)
-    weight = 0.5 * np.linalg.norm(np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0]), axis=1)
+    centres = b.vertices[b.triangles].mean(axis=1)
+    weight = surface.areas(b.vertices, b.triangles)
     body = output.body_sensors(centres, b.region, weight, x, p * a, a, radius)
     return region, p[on], a[on], sensor, body
 
