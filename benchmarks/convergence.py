@@ -77,6 +77,13 @@ PER_TURN = {"sleeve_on_arm": 17, "compression_stocking": 12}
 QUICK = {"tube_on_cylinder": (0.04, 3)}
 #: Regions whose p95 the issue asks to know to ±3 %.
 KEY_REGIONS = ("waist", "upper_chest", "bust", "underbust", "upper_back")
+#: The percentile statistics the study judges: the suffix of their verdicts' keys
+#: (``key<suffix>_p95_within_target``) and their label.
+P95_STATS = {
+    "p95": ("", "p95"),
+    "sensor_p95": ("_sensor", "p95 of a 2 cm sensor's reading"),
+    "body_sensor_p95": ("_body_sensor", "p95 of a 2 cm sensor on the skin"),
+}
 TARGET = 0.03
 
 
@@ -181,7 +188,7 @@ def analyse(recs: list[dict]) -> dict:
                 }
         if row:
             out["regions"][name] = row
-    for s, key in (("p95", ""), ("sensor_p95", "_sensor"), ("body_sensor_p95", "_body_sensor")):
+    for s, (key, _) in P95_STATS.items():
         met = [all(out["regions"][n][s]["relative_error"][k] <= TARGET
                    for n in KEY_REGIONS if s in out["regions"].get(n, {}))
                for k in range(len(ok))]  # fmt: skip
@@ -223,11 +230,7 @@ def markdown(d: dict) -> str:
                 f"{r['max_penetration_over_thickness']:.2%} | {r['wall_s']:.0f} |"
             )
         out += force_table(runs)
-        for s, label in (
-            ("p95", "p95"),
-            ("sensor_p95", "sensor p95 (2 cm sensor)"),
-            ("body_sensor_p95", "skin-sensor p95 (2 cm sensor on the body)"),
-        ):
+        for s, (suffix, label) in P95_STATS.items():
             rows = [(n, row[s]) for n, row in ana.get("regions", {}).items() if s in row]
             if not rows:
                 continue
@@ -243,11 +246,7 @@ def markdown(d: dict) -> str:
                     f"| {name} | {vals} | {c['order']:.2f} | {c['values'][-1]:.3f} ± "
                     f"{c['error'][-1]:.3f} | {c['error_bars_estimate'][-1]:.3f} | {lsq} |"
                 )
-            key = {
-                "p95": "key_p95_within_target",
-                "sensor_p95": "key_sensor_p95_within_target",
-                "body_sensor_p95": "key_body_sensor_p95_within_target",
-            }[s]
+            key = f"key{suffix}_p95_within_target"
             out += ["", f"Key regions' {label} within ±{TARGET:.0%} at each mesh: "
                     f"{ana.get(key)}", ""]  # fmt: skip
             met = ana.get(key.replace("_within_target", "_least_squares_met"))
@@ -283,8 +282,7 @@ def plot(stem: str, ana: dict) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    stats = [s for s in ("p95", "sensor_p95", "body_sensor_p95")
-             if any(s in r for r in ana["regions"].values())]  # fmt: skip
+    stats = [s for s in P95_STATS if any(s in r for r in ana["regions"].values())]
     fig, axes = plt.subplots(1, len(stats), figsize=(6.4 * len(stats), 4.2), squeeze=False)
     for ax, s in zip(axes[0], stats, strict=True):
         for name, row in ana["regions"].items():
@@ -296,8 +294,7 @@ def plot(stem: str, ana: dict) -> None:
         ax.set_xscale("log")
         ax.invert_xaxis()
         ax.set_xlabel("garment mesh size h [mm]")
-        what = {"p95": "p95", "sensor_p95": "p95 of a 2 cm sensor's reading",
-                "body_sensor_p95": "p95 of a 2 cm sensor on the skin"}[s]  # fmt: skip
+        what = P95_STATS[s][1]
         bars = ("least squares, all levels" if len(ana["sizes"]) >= 4 else
                 "grid convergence index")  # fmt: skip
         ax.set_ylabel(f"{what} [kPa]")

@@ -1,5 +1,5 @@
-"""How often do the error bars cover the true error? The two estimators of the convergence study
-on synthetic data with a known limit and mesh noise.
+"""How often do the error bars cover the true error? The three error bars of the scenes and the
+convergence study on synthetic data with a known limit and mesh noise.
 
 The data are Q_k = Q₀ (1 + e (h_k/h_fine)ᵖ + σ ξ_k), ξ_k independent standard normal, on the five
 levels of the convergence study (h₀ = 35 mm, ratio √2): e is the true relative error of the

@@ -147,12 +147,19 @@ def sensor_pressure(centres: Array, x: Array, force: Array, area: Array, radius:
     cell-to-cell scatter of a discrete contact traction (±11–15 % about its local mean on the
     cotton gilet at every mesh) nor the sharpening of a narrow peak.
     """
-    from scipy.spatial import cKDTree
-
     if len(centres) == 0:
         return np.zeros(0)
+    f, a = _pad_sums(centres, x, force, area, radius)
+    return f / a
+
+
+def _pad_sums(centres: Array, x: Array, force: Array, area: Array, radius: float):
+    """(Σ f_j, Σ a_j) over the garment points j within ``radius`` of each centre: the force on a
+    round sensor pad and the garment area over it."""
+    from scipy.spatial import cKDTree
+
     balls = cKDTree(x).query_ball_point(centres, radius)
-    return np.array([force[j].sum() / area[j].sum() for j in balls])
+    return (np.array([force[j].sum() for j in balls]), np.array([area[j].sum() for j in balls]))
 
 
 #: Share of a body sensor's pad the garment must cover for the sensor to count (body_sensors).
@@ -176,15 +183,12 @@ def body_sensors(
     only in part — beside a hem or an armhole — would read the mean over the covered part alone,
     as if its pad were that part, and is left out, as one would not place a sensor there.
     """
-    from scipy.spatial import cKDTree
-
     if len(x) == 0:
         return region[:0], np.zeros(0), np.zeros(0)
     near = np.all((centres >= x.min(axis=0) - radius) & (centres <= x.max(axis=0) + radius), 1)
     near = np.flatnonzero(near)
-    balls = cKDTree(x).query_ball_point(centres[near], radius)
-    cover = np.array([area[j].sum() for j in balls])
-    reading = np.array([force[j].sum() for j in balls]) / np.where(cover > 0, cover, 1.0)
+    f, cover = _pad_sums(centres[near], x, force, area, radius)
+    reading = f / np.where(cover > 0, cover, 1.0)
     keep = (cover >= SENSOR_COVER * np.pi * radius**2) & (reading > 0)
     return region[near[keep]], reading[keep], weight[near[keep]]
 

@@ -165,15 +165,11 @@ def least_squares(sizes: list[float], values: list[float]) -> LeastSquares:
         name, safety, fitted = f"h^{p:.2f}", 1.25, q0 + alpha * x**p
     else:
         fixed = {"h": x[:, None], "h^2": x[:, None] ** 2, "h+h^2": np.stack([x, x**2], axis=1)}
-        best = None
+        fits = []
         for label, b in fixed.items():
             basis = np.hstack([np.ones((n, 1)), b])
-            for w in weights:
-                c, s = _linear_fit(basis, q, w)
-                if best is None or s < best[2]:
-                    best = (label, c, s)
-        name, c, sigma = best
-        basis = np.hstack([np.ones((n, 1)), fixed[name]])
+            fits += [(label, basis, *_linear_fit(basis, q, w)) for w in weights]
+        name, basis, c, sigma = min(fits, key=lambda f: f[3])
         safety, q0, fitted = 3.0, float(c[0]), basis @ c
     eps, dev = np.abs(fitted - q0), np.abs(q - fitted)
     if spread == 0.0:  # the same value on every mesh
