@@ -115,6 +115,10 @@ def child(spec: dict) -> dict:
             s = replace(s, dressing=replace(s.dressing, spring_anchor="start"))
         if part.startswith("release-"):  # release-R: spring factor R per release solve
             s = replace(s, dressing=replace(s.dressing, release_ratio=float(part[8:])))
+        if part.startswith("kappa-"):  # kappa-X: the normal penalty scale κ̂ = X
+            phys = replace(phys, kappa_hat=float(part[len("kappa-") :]))
+        if part.startswith("predictor-"):  # predictor-secant: Newton's start of a grow step
+            s = replace(s, dressing=replace(s.dressing, predictor=part[len("predictor-") :]))
         if part.startswith("spring-"):  # spring-X: c₀ = X E h / L² instead of the scene's
             s = replace(s, dressing=replace(s.dressing, regularisation=float(part[7:])))
         if part == "human":  # the body with arms and head (demos/human_gilet.toml)

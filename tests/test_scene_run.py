@@ -211,3 +211,36 @@ def test_one_and_two_ranks_agree():
     assert world.report.newton_iterations == alone.report.newton_iterations
     assert world.regions[0]["mean_kPa"] == pytest.approx(alone.regions[0]["mean_kPa"], rel=1e-4)
     assert world.summary["ranks"] == MPI.COMM_WORLD.size and alone.summary["ranks"] == 1
+
+
+def test_secant_predictor_starts_near_the_path_and_keeps_the_answer():
+    """``[dressing] predictor = "secant"``: a grow step starts from the last converged state
+    plus the last step's change. The tube's hoop stretch grows linearly with the body's radius,
+    so on this path the extrapolated start must leave a far smaller first residual than the
+    last converged state (the path's curvature is all that remains: measured 1000× smaller once
+    the two steps it extrapolates are both in contact, 3× when the first of them is the step
+    that brought the tube onto the body), and the answer is the same (Newton's tolerance apart)
+    and Laplace's."""
+    s = config.load(SCENE)
+    s = replace(s, garment=replace(s.garment, mesh_size=0.04),
+                dressing=replace(s.dressing, steps=6))  # fmt: skip
+    runs = {}
+    for p in ("none", "secant"):
+        runs[p] = run(replace(s, dressing=replace(s.dressing, predictor=p)),
+                      _shared_tmp(MPI.COMM_WORLD), quiet=True)  # fmt: skip
+        assert runs[p].completed
+    grow = {p: [st for st in r.report.steps if st.stage == "dress"] for p, r in runs.items()}
+    assert [st.shrink for st in grow["none"]] == [st.shrink for st in grow["secant"]]
+    assert grow["secant"][2].residuals[0] < 0.5 * grow["none"][2].residuals[0]
+    for a, b in zip(grow["none"][3:], grow["secant"][3:], strict=True):
+        assert b.residuals[0] < 0.01 * a.residuals[0]
+    for a, b in zip(grow["none"][:2], grow["secant"][:2], strict=True):  # nothing to go on yet
+        assert b.residuals[0] == pytest.approx(a.residuals[0], rel=1e-12)
+    p_sec = _mid_pressure(runs["secant"])
+    assert p_sec == pytest.approx(_laplace(runs["secant"]), rel=0.005)
+    assert p_sec == pytest.approx(_mid_pressure(runs["none"]), rel=1e-5)
+
+
+def test_unknown_predictor_is_refused():
+    with pytest.raises(ValueError, match="predictor"):
+        dressing.dress(None, None, steps=1, margin=0.0, predictor="tangent")

@@ -177,6 +177,9 @@ class DressingConfig:
     #: down to 1e-5 c₀, then 0 (0.25: 10 solves, as many as the adaptive release took on the
     #: gilets and the dress, 8–12)
     release_ratio: float = 0.25
+    #: Newton's start of a grow step: "none" (the last converged state) or "secant" (that state
+    #: plus the last grow step's change, scaled to the new step: ``dressing.secant_start``)
+    predictor: str = "none"
 
 
 @dataclass(frozen=True)
@@ -232,6 +235,7 @@ SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
 DRESSING_SCHEDULES = ("fixed", "adaptive")  # scene.dressing.dress
+DRESSING_PREDICTORS = ("none", "secant")  # scene.dressing.dress
 SPRING_ANCHORS = ("previous", "start")  # scene.build.Regularisation
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
@@ -494,6 +498,7 @@ def _check(s: Scene) -> None:
     _require(d.spring_length > 0, src, "dressing.spring_length", "must be positive")
     _require(d.grow >= 1, src, "dressing.grow", f"must be >= 1, got {d.grow}")
     _one_of(d.schedule, DRESSING_SCHEDULES, src, "dressing.schedule")
+    _one_of(d.predictor, DRESSING_PREDICTORS, src, "dressing.predictor")
     _one_of(d.spring_anchor, SPRING_ANCHORS, src, "dressing.spring_anchor")
     _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
              f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip

@@ -47,7 +47,7 @@ import numpy as np
 
 from fenics_garment._stack import MPI
 from fenics_garment.contact import uzawa
-from fenics_garment.scene.config import DRESSING_SCHEDULES, DressingConfig
+from fenics_garment.scene.config import DRESSING_PREDICTORS, DRESSING_SCHEDULES, DressingConfig
 from fenics_garment.solve import NONFINITE_REASON, NonlinearSolver, reason_name
 
 
@@ -78,6 +78,8 @@ class DressReport:
     penetration0: float = 0.0  # deepest initial penetration of the pattern [m]
     steps: list[DressStep] = field(default_factory=list)
     failures: list[tuple[float, int, int]] = field(default_factory=list)  # (target s, its, reason)
+    #: Newton's residual norms of each failed try (cycling, slow or diverging: the history says)
+    failure_residuals: list[list[float]] = field(default_factory=list)
     regularisation_effect: float = float("nan")  # max |Δp| / max p when c → 0
     final_regularisation: float = 0.0  # c of the final answer [Pa/m]
     # c·max|u − u_prev| of the last accepted solve [Pa]: bounds the force the spring took from
@@ -102,13 +104,19 @@ class DressReport:
         augmented Lagrangian's passes."""
         return self.newton_iterations + sum(f[1] for f in self.failures) + sum(self.al_iterations)
 
+    def _failure_histories(self) -> list[list[float]]:
+        # a report resumed from a checkpoint of an older version has none for its first failures
+        h = self.failure_residuals
+        return [[] for _ in range(len(self.failures) - len(h))] + h
+
     def as_dict(self) -> dict:
         return {
             "shrink0_m": self.shrink0,
             "penetration0_m": self.penetration0,
             "steps": [s.__dict__ for s in self.steps],
             "failed_attempts": [
-                {"target_shrink_m": s, "iterations": i, "reason": r} for s, i, r in self.failures
+                {"target_shrink_m": s, "iterations": i, "reason": r, "residuals": h}
+                for (s, i, r), h in zip(self.failures, self._failure_histories(), strict=True)
             ],
             "cuts": len(self.failures),
             "newton_iterations": self.newton_iterations,
@@ -244,6 +252,7 @@ def dress(
     resume: Progress | None = None,
     schedule: str = "fixed",
     release_ratio: float = DressingConfig.release_ratio,
+    predictor: str = DressingConfig.predictor,
 ) -> DressReport:
     """Grow the body from s₀ back to 0 (see module doc); returns the :class:`DressReport`.
 
@@ -266,9 +275,13 @@ def dress(
         schedule: ``"fixed"`` (the same path on every mesh) or ``"adaptive"`` (module doc).
         release_ratio: factor on the spring constant per release solve of the fixed schedule
             (:func:`_release`); its square root takes twice the solves along the same path.
+        predictor: where Newton starts a grow step: ``"none"`` (the last converged state) or
+            ``"secant"`` (:func:`secant_start`, once two grow solves have converged).
     """
     if schedule not in DRESSING_SCHEDULES:
         raise ValueError(f"schedule must be one of {DRESSING_SCHEDULES}, got {schedule!r}")
+    if predictor not in DRESSING_PREDICTORS:
+        raise ValueError(f"predictor must be one of {DRESSING_PREDICTORS}, got {predictor!r}")
     fixed = schedule == "fixed"
     model, contact, reg = built.model, built.contact, built.regularisation
     st = contact.state
@@ -301,6 +314,7 @@ def dress(
     if mu is not None and not friction_while_growing and pr.stage == "grow":
         mu.value = 0.0
     cuts = 0
+    last = None  # (shrink, state) of the converged grow solve before the current one
     while pr.stage == "grow" and pr.shrink > 0.0:
         s, ds = pr.shrink, pr.step
         target = max(s - ds, 0.0)
@@ -313,9 +327,13 @@ def dress(
                                  f"round-off at shrink {s * 1e3:.3f} mm")  # fmt: skip
         q_conv = q.x.array.copy()
         st.shrink.value = target
+        if predictor == "secant" and last is not None:
+            q.x.array[:] = secant_start(q_conv, *last, s, target)
+            q.x.scatter_forward()
         t0 = time.perf_counter()
         its, reason = solver.solve()
         if reason > 0:
+            last = (s, q_conv) if rep.steps else None  # a solve, not the placed garment
             rec = DressStep(target, its, reason, cuts, time.perf_counter() - t0, float(reg.c.value))
             rec.final_ratios = final_ratios(solver)
             rec.residuals = solver.residual_history().tolist()
@@ -340,6 +358,7 @@ def dress(
         st.shrink.value = s
         st.refresh()
         rep.failures.append((target, its, reason))
+        rep.failure_residuals.append(solver.residual_history().tolist())
         if on_failure:
             on_failure(target, its, reason)
         cuts += 1
@@ -397,6 +416,16 @@ def dress(
         if on_checkpoint:
             on_checkpoint(pr)
     return rep
+
+
+def secant_start(
+    q: np.ndarray, shrink_prev: float, q_prev: np.ndarray, shrink: float, target: float
+) -> np.ndarray:
+    """Newton's start for the grow step ``shrink`` → ``target``: the converged state ``q`` plus
+    the change of the last grow step (``q_prev`` at ``shrink_prev`` → ``q``) scaled to the new
+    step, q + (s − s_target)/(s_prev − s) (q − q_prev) — the secant (linear extrapolation in
+    the shrink) of the path q(s)."""
+    return q + (shrink - target) / (shrink_prev - shrink) * (q - q_prev)
 
 
 def _release(
@@ -496,6 +525,7 @@ def _release_loop(
         its, reason = solver.solve()
         if reason <= 0:
             rep.failures.append((0.0, its, reason))
+            rep.failure_residuals.append(solver.residual_history().tolist())
             model.q.x.array[:] = q_conv
             model.q.x.scatter_forward()
             contact.state.refresh()

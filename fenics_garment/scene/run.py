@@ -553,7 +553,7 @@ def _dress(
                        on_failure=on_failure, augmented_lagrangian=al,
                        on_checkpoint=write_ckpt, resume=progress, schedule=d.schedule,
                        friction_while_growing=d.friction_while_growing,
-                       release_ratio=d.release_ratio)  # fmt: skip
+                       release_ratio=d.release_ratio, predictor=d.predictor)  # fmt: skip
     except DressingFailed as err:
         say("  " + str(err))
         return err.report, False, str(err)
