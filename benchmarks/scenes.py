@@ -115,6 +115,9 @@ def child(spec: dict) -> dict:
             s = replace(s, dressing=replace(s.dressing, spring_anchor="start"))
         if part.startswith("release-"):  # release-R: spring factor R per release solve
             s = replace(s, dressing=replace(s.dressing, release_ratio=float(part[8:])))
+        if part.startswith("penalty-"):  # penalty-X: physics.penalty_length X m; "cells": 0
+            v = part[len("penalty-") :]
+            phys = replace(phys, penalty_length=0.0 if v == "cells" else float(v))
         if part.startswith("kappa-"):  # kappa-X: the normal penalty scale κ̂ = X
             phys = replace(phys, kappa_hat=float(part[len("kappa-") :]))
         if part.startswith("predictor-"):  # predictor-secant: Newton's start of a grow step
@@ -249,6 +252,7 @@ def _record(res, spec: dict, comm) -> dict:
         "per_turn": spec.get("per_turn"),
         "schedule": sm.get("dressing_schedule"),
         "grow_steps": sm.get("dressing_steps"),
+        "penalty_length": sm.get("penalty_length_m"),  # absent: κ scaled by the cells
         # the release as the code ran it (benchmarks/sweep.py reuses runs of the same release)
         "release": release_settings(),
         # (stage, its, r_k/r_k-1 of the last two iterations) of every converged solve

@@ -51,6 +51,8 @@ def test_bundled_scenes_load(name):
          "must be an array of strings"),
         ("[garment]\nrefine_edges = ['armpit']\n", "garment.refine_edges", "no edge 'armpit'"),
         ("[garment]\nedge_ratio = 1.5\n", "garment.edge_ratio", "in (0, 1]"),
+        ("[physics]\npenalty_length = -0.04\n", "physics.penalty_length", "must be ≥ 0"),
+        ("[dressing]\npredictor = 'tangent'\n", "dressing.predictor", "secant"),
     ],
 )  # fmt: skip
 def test_errors_name_file_and_key(tmp_path, text, key, words):

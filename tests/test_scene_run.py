@@ -244,3 +244,24 @@ def test_secant_predictor_starts_near_the_path_and_keeps_the_answer():
 def test_unknown_predictor_is_refused():
     with pytest.raises(ValueError, match="predictor"):
         dressing.dress(None, None, steps=1, margin=0.0, predictor="tangent")
+
+
+def test_penalty_is_the_same_on_every_garment_mesh():
+    """``[physics] penalty_length`` ℓ: κ = κ̂ E h / ℓ² whatever the cells
+    (:func:`fenics_garment.contact.terms.default_penalty`, membrane stiffness E h of the
+    fabric); with ℓ = 0 ℓ is the largest cell, so κ grows as the cells shrink."""
+    from fenics_garment.scene import build
+
+    base = config.load(SCENE)
+    kappas = {}
+    for length in (0.04, 0.0):
+        for h in (0.04, 0.02):
+            s = replace(base, garment=replace(base.garment, mesh_size=h),
+                        physics=replace(base.physics, penalty_length=length))  # fmt: skip
+            b = build.build(s, MPI.COMM_WORLD)
+            eh = b.model.stiffness.membrane_scale
+            kappas[length, h] = float(b.contact.kappa.value)
+            ell = length or MPI.COMM_WORLD.allreduce(b.model.h_cell.x.array.max(), op=MPI.MAX)
+            assert kappas[length, h] == pytest.approx(s.physics.kappa_hat * eh / ell**2)
+    assert kappas[0.04, 0.02] == kappas[0.04, 0.04]
+    assert kappas[0.0, 0.02] > 2 * kappas[0.0, 0.04]

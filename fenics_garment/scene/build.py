@@ -224,7 +224,7 @@ def build(scene: Scene, comm: MPI.Comm) -> Built:
     keep = search.reach_mask(body.vertices, body.triangles, garment.points, search.REACH_MARGIN)
     surface = SmoothBody if p.body_surface == "smooth" else search.SearchSurface
     sbody = surface(body.vertices, body.triangles, keep=keep)  # cropped search body
-    contact = shell_contact.attach(model, sbody, kappa=tissue_stiffness(scene),
+    contact = shell_contact.attach(model, sbody, kappa=contact_penalty(scene, model),
                                    kappa_hat=p.kappa_hat, rule=_rule(model),
                                    mu=p.friction if p.friction > 0 else None,
                                    kappa_t=stick_stiffness(scene))  # fmt: skip
@@ -245,6 +245,20 @@ def tissue_stiffness(scene: Scene) -> float | None:
     check_tissue_law(scene)  # also for a Scene made in Python (the loader checks files)
     b = scene.body
     return SoftTissue(depth=b.tissue_depth).stiffness if b.tissue == "soft" else None
+
+
+def contact_penalty(scene: Scene, model: ShellModel) -> float | None:
+    """The normal contact stiffness κ [Pa/m]: a soft body's tissue (:func:`tissue_stiffness`),
+    else the penalty κ̂ E h / ℓ² (:func:`fenics_garment.contact.terms.default_penalty`) with
+    ℓ = ``physics.penalty_length``; None (``penalty_length = 0``): ℓ is the garment's largest
+    cell (``contact.shell.attach``)."""
+    from fenics_garment.contact.terms import default_penalty
+
+    p = scene.physics
+    soft = tissue_stiffness(scene)
+    if soft is not None or p.penalty_length == 0.0:
+        return soft
+    return default_penalty(model.stiffness.membrane_scale, p.penalty_length, p.kappa_hat)
 
 
 def stick_stiffness(scene: Scene) -> float:

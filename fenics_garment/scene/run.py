@@ -637,6 +637,8 @@ def _outputs(
         "dressing": report.as_dict(),
         "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
         "dressing_steps": scene.dressing.steps,
+        # ℓ of the penalty κ̂ E h / ℓ² (0: the garment's largest cell; config.PhysicsConfig)
+        "penalty_length_m": scene.physics.penalty_length,
         "time_s": times,
         "solver_time_s": {
             k: v for k, v in solver.timings.as_dict().items() if k not in ("steps", "cuts")
