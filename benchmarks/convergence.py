@@ -36,7 +36,11 @@ the factor R per release solve (``release_ratio``) and ``spring-X`` the spring c
 triangles of X m instead of the scene's (e.g. ``body-0.0075``: the garment levels on a body finer
 than the finest garment, so the garment's part of the error is measured alone).
 ``armhole-R`` refines the armholes to cells of R × h (``[garment] refine_edges``, ``edge_ratio``;
-a graded sequence: every level's edge cells shrink with its h).
+a graded sequence: every level's edge cells shrink with its h). ``penalty-X`` sets ``[physics]
+penalty_length`` to X m, ``penalty-cells`` to 0 (κ scaled by the garment's cells, as every
+record made before that key existed: those without a ``penalty_length`` in their runs).
+``predictor-secant`` starts each grow step's Newton from the secant of the last two
+(``[dressing] predictor``).
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the

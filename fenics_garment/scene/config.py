@@ -136,9 +136,10 @@ class PhysicsConfig:
     kappa_hat: float = 10.0  # penalty scale κ = κ̂ E h / ℓ² (contact.terms.default_penalty)
     #: ℓ [m] of the penalty κ = κ̂ E h / ℓ² on a rigid body: a fixed length, so κ is the same on
     #: every garment mesh (on a finer mesh a κ scaled by its cells made Newton converge only
-    #: linearly while contact points switched: the nylon gilet at 8.8 mm took 5 failed tries and
-    #: 241 Newton iterations, against none and 87 with κ fixed, the same pressures to 0.8 %:
-    #: ``benchmarks/results/penalty.json``); 0: the garment's largest cell (κ grows as 1/ℓ²)
+    #: linearly while contact points switched: the nylon gilet at 8.8 mm took 4 failed tries and
+    #: 206 Newton iterations, against none and 88 with ℓ = 4 cm, the same pressures to 0.7 %:
+    #: records ``nylon_gilet:body-0.015+penalty-cells`` and ``nylon_gilet:body-0.015`` in
+    #: ``benchmarks/results/convergence.json``); 0: the garment's largest cell (κ ∝ 1/cell²)
     penalty_length: float = 0.04
     #: the stick penalty κ_T [Pa/m] of the friction law; 0: the skin's tangential stiffness
     #: G / body.tissue_depth with the seed paper's Table 1 tissue (scene.build.stick_stiffness)
