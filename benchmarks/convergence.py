@@ -39,8 +39,8 @@ than the finest garment, so the garment's part of the error is measured alone).
 a graded sequence: every level's edge cells shrink with its h). ``penalty-X`` sets ``[physics]
 penalty_length`` to X m, ``penalty-cells`` to 0 (κ scaled by the garment's cells, as every
 record made before that key existed: those without a ``penalty_length`` in their runs).
-``predictor-secant`` starts each grow step's Newton from the secant of the last two
-(``[dressing] predictor``).
+``kappa-X`` sets the penalty scale ``[physics] kappa_hat`` to X. ``predictor-secant`` starts
+each grow step's Newton from the secant of the last two (``[dressing] predictor``).
 
 ``--variant friction-off`` (μ = 0, recorded as ``<scene>:friction-off``) takes friction out: a
 frictionless answer does not depend on the dressing path, so its convergence isolates the
