@@ -219,8 +219,8 @@ def test_secant_predictor_starts_near_the_path_and_keeps_the_answer():
     so on this path the extrapolated start must leave a far smaller first residual than the
     last converged state (the path's curvature is all that remains: measured 1000× smaller once
     the two steps it extrapolates are both in contact, 3× when the first of them is the step
-    that brought the tube onto the body), and the answer is the same (Newton's tolerance apart)
-    and Laplace's."""
+    that brought the tube onto the body), and the answer is the one without it (Newton's
+    tolerance apart) and Laplace's."""
     s = config.load(SCENE)
     s = replace(s, garment=replace(s.garment, mesh_size=0.04),
                 dressing=replace(s.dressing, steps=6))  # fmt: skip

@@ -104,11 +104,6 @@ class DressReport:
         augmented Lagrangian's passes."""
         return self.newton_iterations + sum(f[1] for f in self.failures) + sum(self.al_iterations)
 
-    def _failure_histories(self) -> list[list[float]]:
-        # a report resumed from a checkpoint of an older version has none for its first failures
-        h = self.failure_residuals
-        return [[] for _ in range(len(self.failures) - len(h))] + h
-
     def as_dict(self) -> dict:
         return {
             "shrink0_m": self.shrink0,
@@ -116,7 +111,7 @@ class DressReport:
             "steps": [s.__dict__ for s in self.steps],
             "failed_attempts": [
                 {"target_shrink_m": s, "iterations": i, "reason": r, "residuals": h}
-                for (s, i, r), h in zip(self.failures, self._failure_histories(), strict=True)
+                for (s, i, r), h in zip(self.failures, self.failure_residuals, strict=True)
             ],
             "cuts": len(self.failures),
             "newton_iterations": self.newton_iterations,
@@ -231,6 +226,8 @@ class Progress:
         r = dict(d["report"])
         r["steps"] = [DressStep(**s) for s in r["steps"]]
         r["failures"] = [tuple(f) for f in r["failures"]]
+        # a checkpoint written before the histories were kept: none for its failures
+        r.setdefault("failure_residuals", [[] for _ in r["failures"]])
         return cls(**{**d, "report": DressReport(**r)})
 
 
