@@ -174,6 +174,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [solvers_markdown(d), ""]
             continue
+        if name == "factor_scaling":  # the gilet's linear solve on 1 and 2 ranks
+            from benchmarks.factor_scaling import markdown as factor_markdown
+
+            parts += [factor_markdown(d), ""]
+            continue
         if name == "speed":  # per-iteration split before/after (benchmarks/speed.py)
             from benchmarks.speed import markdown as speed_markdown
 

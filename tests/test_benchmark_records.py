@@ -82,3 +82,14 @@ def test_the_least_squares_verdict_of_a_study_names_the_regions_within_the_targe
     assert ana["key_sensor_p95_least_squares_met"] == want
     ls = ana["regions"]["waist"]["p95"]["least_squares"]
     assert ls["relative_error"][-1] == pytest.approx(1.25 * 0.04 / 1.04, rel=1e-3)
+
+
+def test_the_parallel_ceiling_is_amdahls_law():
+    """The 2-rank ceiling of a run whose linear share s gains r and the rest 2×: Amdahl's law,
+    1 / (s / r + (1 − s) / 2) — 2 with no linear solve, r with nothing else, and 4/3 for half
+    the run not gaining at all."""
+    from benchmarks.factor_scaling import ceiling
+
+    assert ceiling(0.0, 1.0) == pytest.approx(2.0)
+    assert ceiling(1.0, 1.3) == pytest.approx(1.3)
+    assert ceiling(0.5, 1.0) == pytest.approx(4.0 / 3.0)
