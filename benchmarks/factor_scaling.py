@@ -90,8 +90,7 @@ def dump_child(spec: dict) -> dict:
     finally:
         fem_petsc.assemble_jacobian = assemble
     first = ranges[min(ranges)]
-    # each rank's own split of the run: an imbalance shows as one rank's longer assembly and
-    # the other's longer "linear solve" (it waits there for the first)
+    # each rank's own split of the run (they wait for each other at every assembly's exchange)
     split = comm.allgather(res.summary["solver_time_s"])
     return {"dofs": first[-1][1], "rows": [b - a for a, b in first], "iterations": sorted(ranges),
             "per_rank_solver_time_s": split}  # fmt: skip
@@ -257,7 +256,9 @@ def markdown(d: dict) -> str:
                   + " (rtol 1e-10, at most 100)."]  # fmt: skip
     split = d.get("scene_split")
     if split:
-        lines += ["", "Each rank's own time split of the 2-rank dump run (the shipped scene) [s]: "
+        lines += ["", "Each rank's own time split of the 2-rank dump run (the shipped scene; every "
+                  "assembly ends in an exchange between the ranks, so a rank that finishes first "
+                  "waits there and the two splits agree) [s]: "
                   + "; ".join(f"rank {k}: residual {t['residual']:.1f}, Jacobian "
                               f"{t['jacobian']:.1f}, linear solve and waiting "
                               f"{t['solve'] - t['residual'] - t['jacobian']:.1f}"
