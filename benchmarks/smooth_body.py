@@ -5,15 +5,16 @@
   completed / stalled, spring released to c = 0, solves, Newton iterations, failed attempts, the
   residual ratio r_k/r_(k−1) of the last iteration of every converged solve, contact-search time.
 * ``refine``: each gilet at garment mesh ``--garment H`` (default the first of ``SIZES``) on the
-  body meshes 15 and 7.5 mm: the change of every region's p95 pressure (the body-mesh part of
-  the error), per surface, element and dressing schedule.
+  body meshes 15 and 7.5 mm (``--bodies 3``: and 3.75 mm): the change of every region's p95
+  pressure per halving of the body mesh (the body-mesh part of the error), per surface, element
+  and dressing schedule. ``--reuse`` keeps the stored completed runs of the same kind.
 
 Each run is one ``mpiexec -n 2`` child of :func:`benchmarks.scenes.spawn` (spec fields
 ``body_surface``, ``body_mesh_size``). Writes ``benchmarks/results/smooth_body.json`` (kept after
 every run) and prints the tables; times are on a shared 2-core machine (loadavg recorded).
 
     python -m benchmarks.smooth_body [--quick] [runs] [refine] [--garment H] [--surface S]
-                                     [cotton|nylon ...]
+                                     [--bodies N] [--reuse] [cotton|nylon ...]
     python -m benchmarks.smooth_body table            (the stored record as Markdown tables)
     python -m benchmarks.smooth_body row FOLDER ...   (the underbust row of run folders' maps)
 """
@@ -79,16 +80,16 @@ def row(r: dict) -> str:
             f"load {r['loadavg'][0]:.1f}")  # fmt: skip
 
 
-def refinement_table(data: dict, stat: str = "p95") -> dict:
-    """``stat`` (p95 or sensor_p95) change per region [%] when the body mesh goes from BODY to
-    BODY/2, for every pair of completed runs that differ only in the body mesh (scene, surface,
-    garment mesh, element, dressing schedule); the latest run of each kind."""
+def refinement_table(data: dict, stat: str = "p95", coarse: float = BODY) -> dict:
+    """``stat`` (p95 or sensor_p95) change per region [%] when the body mesh goes from ``coarse``
+    to ``coarse``/2, for every pair of completed runs that differ only in the body mesh (scene,
+    surface, garment mesh, element, dressing schedule); the latest run of each kind."""
     out = {}
     ok = {_key(r): r for r in data["runs"] if r.get("status") == "ok" and r["completed"]}
     for key, b in ok.items():
         name, surface, h, body, element, schedule = key
-        a = ok.get((name, surface, h, BODY, element, schedule))
-        if body != BODY / 2 or a is None or f"regions_{stat}_kPa" not in a:
+        a = ok.get((name, surface, h, coarse, element, schedule))
+        if body != coarse / 2 or a is None or f"regions_{stat}_kPa" not in a:
             continue
         pa, pb = a[f"regions_{stat}_kPa"], b[f"regions_{stat}_kPa"]
         label = f"{name}/{surface}, garment {h * 1e3:.1f} mm {element or 'P1-P1'} {schedule}"
@@ -131,12 +132,13 @@ def markdown(data: dict) -> str:
                      f"{r['newton_its']} | {r['failed_attempts']} | {np.median(lr):.1e} / "
                      f"{max(lr):.1e} | {r['contact_search_s']:.0f} / "
                      f"{r['dressing_s']:.0f} |")  # fmt: skip
-    for stat in ("p95", "sensor_p95"):
-        ref = data.get(f"refinement_{stat}_change_percent", {})
+    for stat, fine in [(s, f) for s in ("p95", "sensor_p95") for f in ("", "_fine")]:
+        ref = data.get(f"refinement_{stat}{fine}_change_percent", {})
         if not ref:
             continue
         regions = sorted({k for v in ref.values() for k in v})
-        lines += ["", f"| {stat} change, body 15 → 7.5 mm [%] | " + " | ".join(regions) + " |",
+        step = "7.5 → 3.75" if fine else "15 → 7.5"
+        lines += ["", f"| {stat} change, body {step} mm [%] | " + " | ".join(regions) + " |",
                   "|---|" + "---|" * len(regions)]  # fmt: skip
         for case, v in ref.items():
             cells = [f"{v[k]:+.1f}" if k in v else "" for k in regions]
@@ -162,7 +164,8 @@ def underbust_row(folder: str, z: float = 1.215, half: float = 0.012) -> dict:
 
 def main(argv: list[str]) -> int:
     if argv[:1] != ["row"]:  # row takes run folders
-        bad = check_args(argv, __doc__, {"--quick"}, {"--garment", "--surface"},
+        bad = check_args(argv, __doc__, {"--quick", "--reuse"},
+                         {"--garment", "--surface", "--bodies"},
                          {"table", "runs", "refine", *SCENES})  # fmt: skip
         if bad is not None:
             return bad
@@ -179,6 +182,8 @@ def main(argv: list[str]) -> int:
     h_ref = float(argv[argv.index("--garment") + 1]) if "--garment" in argv else SIZES[mode][0]
     surfaces = [argv[argv.index("--surface") + 1]] if "--surface" in argv else SURFACES[::-1]
     names = [a for a in argv if a in SCENES] or list(SCENES)
+    bodies = [BODY / 2**k for k in range(int(argv[argv.index("--bodies") + 1]))] if (
+        "--bodies" in argv) else [BODY, BODY / 2]  # fmt: skip
     data = _load()
     data.setdefault("meta", {})["loadavg_start"] = list(os.getloadavg())
     if "runs" in parts:
@@ -189,10 +194,19 @@ def main(argv: list[str]) -> int:
     if "refine" in parts:
         for surface in surfaces:
             for name in names:
-                for body in (BODY, BODY / 2):
+                for body in bodies:
+                    # a stored run of this scene, surface and meshes (the current element and
+                    # dressing: the runs that record them)
+                    if "--reuse" in argv and any(
+                        _key(r)[:4] == (name, surface, h_ref, body) and r.get("element")
+                        and r.get("status") == "ok" and r["completed"] for r in data["runs"]
+                    ):  # fmt: skip
+                        print(f"{name} {surface} h={h_ref} body={body}: kept from the record")
+                        continue
                     run_one(data, name, surface, h_ref, body)
     for stat in ("p95", "sensor_p95"):
         data[f"refinement_{stat}_change_percent"] = refinement_table(data, stat)
+        data[f"refinement_{stat}_fine_change_percent"] = refinement_table(data, stat, BODY / 2)
     _save(data)
     print(markdown(data))
     return 0
