@@ -174,7 +174,7 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [solvers_markdown(d), ""]
             continue
-        if name == "factor_scaling":  # the gilet's linear solve on 1 and 2 ranks
+        if name.startswith("factor_scaling"):  # the gilet's linear solve on 1 and 2 ranks
             from benchmarks.factor_scaling import markdown as factor_markdown
 
             parts += [factor_markdown(d), ""]
@@ -252,10 +252,12 @@ def scenes_section(d: dict) -> list[str]:
                 f"{r['loadavg'][0]:.1f} | {'dressed' if r['completed'] else 'stopped'} |"
             )
         out.append("")
-    par = s.get("parallel")
-    if par:
-        one = next(r for r in runs if r.get("part") == "parallel")
-        out += ["### 1 rank against 2 ranks", "",
+    for part in sorted(k for k in s if k.startswith("parallel")):
+        par = s[part]
+        one = next((r for r in runs if r.get("part") == part), None)
+        if not par or one is None:
+            continue
+        out += ["### 1 rank against 2 ranks" + ("" if part == "parallel" else f" ({part})"), "",
                 f"Gilet at h = {one.get('mesh_size')} ({one.get('dofs')} dofs): speed-up "
                 f"{_f(par.get('speedup_warm'))}× warm wall, {_f(par.get('speedup_dressing'))}× "
                 f"dressing; largest relative difference of the region mean pressures "
@@ -267,7 +269,8 @@ def scenes_section(d: dict) -> list[str]:
             out += [f"| {k + 1} | {r['one_s']:.1f} | {r['two_s']:.1f} | {r['speedup']:.2f}× | "
                     f"{r['capacity']:.2f}× |" for k, r in enumerate(par["rounds"])]  # fmt: skip
             out.append("")
-        out += [SCALING_NOTE, ""]
+        if part == "parallel":
+            out += [SCALING_NOTE, ""]
     sk = s.get("skips")
     if sk:
         out += ["### Skips on and off (gilet, 2 ranks)", "",

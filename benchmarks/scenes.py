@@ -22,7 +22,10 @@
 Writes ``benchmarks/results/scenes.json`` (and ``stress.json``); ``os.getloadavg()`` is in every
 record: the two cores are shared, so times are only comparable within one run.
 
-    python -m benchmarks scenes [--quick] [growth|parallel|skips|peer|stress ...]
+    python -m benchmarks scenes [--quick] [growth|parallel|skips|peer|stress ...] [--mesh-size H]
+
+``--mesh-size H`` runs ``parallel`` at garment mesh H [m] instead of the shipped one, stored as
+part ``parallel-h<H in mm>`` beside the shipped mesh's (e.g. the converged 12.4 mm gilet).
 """
 
 from __future__ import annotations
@@ -381,9 +384,11 @@ def growth(mode: str, say) -> tuple[list[dict], dict]:
     return recs, summary
 
 
-def parallel(mode: str, say, two: dict | None, rounds: int = 2) -> tuple[list[dict], dict]:
+def parallel(
+    mode: str, say, two: dict | None, rounds: int = 2, h: float | None = None
+) -> tuple[list[dict], dict]:
     """1 rank against 2 on the cotton gilet: at its shipped mesh (the issue "Fast scenes" asks
-    for the default mesh), at ``SKIP_SIZE`` in quick mode.
+    for the default mesh), at ``SKIP_SIZE`` in quick mode, or at ``h``.
 
     The two cores are a shared virtual machine whose speed drifts by ±15 % within minutes, so
     each of ``rounds`` rounds runs 1 rank, 2 ranks and — the machine's own ceiling at that
@@ -393,7 +398,8 @@ def parallel(mode: str, say, two: dict | None, rounds: int = 2) -> tuple[list[di
     (the least-disturbed of each, as ``timeit`` takes the minimum)."""
     from fenics_garment.scene import config
 
-    h = config.load(GILET).garment.mesh_size if mode == "default" else SKIP_SIZE[mode]
+    if h is None:
+        h = config.load(GILET).garment.mesh_size if mode == "default" else SKIP_SIZE[mode]
     recs, per_round = [], []
     for k in range(rounds):
         one = spawn({"mesh_size": h}, ranks=1)
@@ -695,7 +701,7 @@ def main(argv: list[str] | None = None) -> int:
     argv = list(argv or [])
     if child_main(argv, child):
         return 0
-    bad = check_args(argv, __doc__, {"--quick"}, (), PARTS)
+    bad = check_args(argv, __doc__, {"--quick"}, {"--mesh-size"}, PARTS)
     if bad is not None:
         return bad
     mode = "quick" if "--quick" in argv else "default"
@@ -733,7 +739,12 @@ def main(argv: list[str] | None = None) -> int:
         runs["growth"] = recs
         two = next((r for r in recs if r.get("mesh_size") == SKIP_SIZE[mode]
                     and r["status"] == "ok"), None)  # fmt: skip
-    if "parallel" in parts:
+    if "parallel" in parts and "--mesh-size" in argv:
+        h = float(argv[argv.index("--mesh-size") + 1])
+        key = f"parallel-h{1e3 * h:.1f}"
+        say(f"{key}: 1 rank")
+        runs[key], summary[key] = parallel(mode, say, None, h=h)
+    elif "parallel" in parts:
         say("parallel: 1 rank")
         runs["parallel"], summary["parallel"] = parallel(mode, say, two)
     if "skips" in parts:

@@ -50,6 +50,17 @@ def _read(name: str) -> dict:
     return json.loads(p.read_text()) if p.exists() else {}
 
 
+def _other_meshes(scenes: dict) -> str:
+    """The 2-rank speed-ups measured at other garment meshes (``scenes --mesh-size``)."""
+    found = []
+    for key, par in sorted(scenes.get("summary", {}).items()):
+        one = next((r for r in scenes.get("runs", []) if r.get("part") == key), None)
+        if key.startswith("parallel-") and par and par.get("speedup_warm") and one:
+            found.append(f"{par['speedup_warm']:.2f}× at h = {1e3 * one['mesh_size']:.1f} mm "
+                         f"({one['dofs']:,} dofs)")  # fmt: skip
+    return ("; " + ", ".join(found)) if found else ""
+
+
 def _linear_bound() -> str:
     """The MUMPS solve's own 2-rank speed-up on the gilet's Jacobian and the ceiling it sets on
     the scene's (``factor_scaling.json``), or nothing when not measured."""
@@ -217,7 +228,9 @@ def rows() -> list[tuple[str, str, str, str, str]]:
             (
                 "5. 2 ranks / 1 rank, cotton gilet",
                 f"≥ {SPEEDUP_2_RANKS}",
-                f"{sp:.2f}× warm wall, {par['speedup_dressing']:.2f}× dressing" + _linear_bound(),
+                f"{sp:.2f}× warm wall, {par['speedup_dressing']:.2f}× dressing"
+                + _linear_bound()
+                + _other_meshes(scenes),
                 "yes" if sp >= SPEEDUP_2_RANKS else "no",
                 _src(one, "scenes.json, part parallel")
                 + (
