@@ -144,7 +144,13 @@ def main(argv: list[str] | None = None) -> int:
         print(window_markdown(data))
         return 0
     cases = [case(p, e, s, draws, rng) for p in ORDERS for e in ERRORS for s in NOISES]
-    data = {"draws": draws, "seed": SEED, "cases": cases}
+    old = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    data = {
+        "draws": draws,
+        "seed": SEED,
+        "cases": cases,  # the window study is kept
+        **({"window_cases": old["window_cases"]} if "window_cases" in old else {}),
+    }
     RESULTS.parent.mkdir(exist_ok=True)
     RESULTS.write_text(json.dumps(data, indent=1))
     print(markdown(data))
