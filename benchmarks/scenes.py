@@ -706,6 +706,9 @@ def main(argv: list[str] | None = None) -> int:
         return bad
     mode = "quick" if "--quick" in argv else "default"
     parts = [a for a in argv if a in PARTS] or list(PARTS)
+    if "--mesh-size" in argv and parts != ["parallel"]:  # it sets the mesh of that part only
+        print("error: --mesh-size goes with the part parallel alone", file=sys.stderr)
+        return 2
     say = lambda *a: print(*a, flush=True)  # noqa: E731
     path = RESULTS / "scenes.json"
     data = json.loads(path.read_text()) if path.exists() else {}
