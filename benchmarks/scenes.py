@@ -188,6 +188,16 @@ def _speed_variant(spec: dict) -> None:
         shell.ShellContact.solver_hooks = lambda self: {"pre_residual": [self.refresh]}
 
 
+#: The dressing path settings of the records made before they were recorded (scene.config
+#: DressingConfig: path_tolerance, release_multipliers).
+LEGACY_PATH = {"path_tolerance": 1e-8, "release_multipliers": False}
+
+
+def dressing_path(record: dict) -> dict:
+    """The path tolerance and release multipliers a record was dressed with."""
+    return record.get("dressing_path") or LEGACY_PATH
+
+
 def release_settings() -> dict:
     """The constants of the release of the dressing spring (``scene.dressing``)."""
     from fenics_garment.scene import dressing
@@ -255,6 +265,8 @@ def _record(res, spec: dict, comm) -> dict:
         "per_turn": spec.get("per_turn"),
         "schedule": sm.get("dressing_schedule"),
         "grow_steps": sm.get("dressing_steps"),
+        # path tolerance and multiplier updates in the release (absent: LEGACY_PATH)
+        "dressing_path": sm.get("dressing_path", LEGACY_PATH),
         "penalty_length": sm.get("penalty_length_m"),  # absent: κ scaled by the cells
         # the release as the code ran it (benchmarks/sweep.py reuses runs of the same release)
         "release": release_settings(),

@@ -62,16 +62,22 @@ def above_tolerance(r: dict) -> bool:
 
 
 def _known(stem: str) -> list[dict]:
-    """Completed earlier runs of ``stem`` on the current schedule and release (convergence and
-    sweep; a record from before the release was recorded is run again, and so is a run that
-    ended above the penetration tolerance or stalled)."""
+    """Completed earlier runs of ``stem`` on the current schedule, release and dressing path
+    (path tolerance, release multipliers) of the shipped scene (convergence and sweep; a record
+    from before the release was recorded is run again, and so is a run that ended above the
+    penetration tolerance or stalled)."""
+    from fenics_garment.scene import config
+
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
     release = scene_bench.release_settings()
+    d = config.load(convergence.SCENES / f"{stem}.toml").dressing
+    path = {"path_tolerance": d.path_tolerance, "release_multipliers": d.release_multipliers}
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
             if r.get("status") == "ok" and r.get("completed")
             and convergence.same_path(r, stem, "default")
             and r.get("release") == release
+            and scene_bench.dressing_path(r) == path
             and r.get("variant", "default") == "default"]  # fmt: skip
 
 

@@ -415,6 +415,14 @@ class NonlinearSolver:
         snes.setTolerances(atol=atol)
         return atol
 
+    def set_atol(self, atol: float) -> float:
+        """Absolute residual tolerance of the following solves (not below the round-off floor
+        measured at construction, 10× :attr:`residual_floor`); returns the previous one."""
+        snes = self.problem.solver
+        previous = snes.getTolerances()[1]
+        snes.setTolerances(atol=max(atol, 10.0 * self.residual_floor))
+        return previous
+
     def set_line_search(self, kind: str) -> str:
         """SNES line search of the following solves ("basic", "l2", "bt", …); returns the
         previous one."""

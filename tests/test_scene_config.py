@@ -53,6 +53,9 @@ def test_bundled_scenes_load(name):
         ("[garment]\nedge_ratio = 1.5\n", "garment.edge_ratio", "in (0, 1]"),
         ("[physics]\npenalty_length = -0.04\n", "physics.penalty_length", "must be ≥ 0"),
         ("[dressing]\npredictor = 'tangent'\n", "dressing.predictor", "secant"),
+        ("[dressing]\npath_tolerance = 0.5\n", "dressing.path_tolerance", "in (0, 0.01]"),
+        ("[dressing]\nrelease_multipliers = 1\n", "dressing.release_multipliers",
+         "must be a boolean"),
     ],
 )  # fmt: skip
 def test_errors_name_file_and_key(tmp_path, text, key, words):

@@ -42,6 +42,8 @@ class UzawaReport:
     #: what was done after each failed pass: "plain step" (the extrapolated multiplier step
     #: overshot: the plain one), "smaller raise" (κ ×√10 instead of ×10), "no raise"
     recoveries: list[str] = field(default_factory=list)
+    tolerance: float = 0.0  # the penetration tolerance [m]
+    finishing: int = 0  # passes at the last multipliers, without an update (scene.dressing)
 
 
 def max_penetration(state: ContactState) -> float:
@@ -145,7 +147,7 @@ def augmented_lagrangian(
     failed at 6.5 µm against a 4.6 µm tolerance); after a failed pass at an unchanged κ with the
     plain (not extrapolated) multiplier step.
     """
-    report = UzawaReport()
+    report = UzawaReport(tolerance=tol)
     previous = None
     last_gap = None  # the gap of the last converged pass
     raises = 0

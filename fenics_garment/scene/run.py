@@ -553,7 +553,9 @@ def _dress(
                        on_failure=on_failure, augmented_lagrangian=al,
                        on_checkpoint=write_ckpt, resume=progress, schedule=d.schedule,
                        friction_while_growing=d.friction_while_growing,
-                       release_ratio=d.release_ratio, predictor=d.predictor)  # fmt: skip
+                       release_ratio=d.release_ratio, predictor=d.predictor,
+                       path_tolerance=d.path_tolerance,
+                       release_multipliers=d.release_multipliers)  # fmt: skip
     except DressingFailed as err:
         say("  " + str(err))
         return err.report, False, str(err)
@@ -637,6 +639,8 @@ def _outputs(
         "dressing": report.as_dict(),
         "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
         "dressing_steps": scene.dressing.steps,
+        "dressing_path": {"path_tolerance": scene.dressing.path_tolerance,
+                          "release_multipliers": scene.dressing.release_multipliers},
         # ℓ of the penalty κ̂ E h / ℓ² (0: the garment's largest cell; config.PhysicsConfig)
         "penalty_length_m": scene.physics.penalty_length,
         "time_s": times,
