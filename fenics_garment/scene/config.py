@@ -522,8 +522,12 @@ def _check(s: Scene) -> None:
     _one_of(d.schedule, DRESSING_SCHEDULES, src, "dressing.schedule")
     _one_of(d.predictor, DRESSING_PREDICTORS, src, "dressing.predictor")
     _one_of(d.spring_anchor, SPRING_ANCHORS, src, "dressing.spring_anchor")
-    _require(0 < d.path_tolerance <= 1e-2, src, "dressing.path_tolerance",
-             f"is a fraction of the scene's force scale in (0, 0.01], got {d.path_tolerance}")
+    _require(
+        0 < d.path_tolerance <= 1e-2,
+        src,
+        "dressing.path_tolerance",
+        f"is a fraction of the scene's force scale in (0, 0.01], got {d.path_tolerance}",
+    )
     _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
              f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip
     _one_of(s.solver.linear, tuple(LINEAR_SOLVERS), src, "solver.linear")
