@@ -17,6 +17,7 @@ import pytest
 from fenics_garment._stack import MPI
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.scene import config, dressing
+from fenics_garment.scene import run as run_module
 from fenics_garment.scene.run import run
 from fenics_garment.verification.contact import tube_pressure
 
@@ -123,6 +124,15 @@ def test_shipped_tube_obeys_laplace(h, monkeypatch):
     res = run(s, _shared_tmp(MPI.COMM_WORLD), quiet=True)
     assert res.completed and res.summary["geometry_degree"] == 2
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
+    # the path solves stop at the path tolerance, the answer at the solver's: the c = 0 solve
+    # and one last pass at the final multipliers (scene.dressing)
+    rep, d = res.report, s.dressing
+    path_atol = rep.residual_atol * d.path_tolerance / run_module.SCENE_SNES_OPTIONS["snes_rtol"]
+    assert all(st.residuals[-1] <= path_atol for st in rep.steps)
+    final = rep.steps[-1]
+    assert final.stage == "release" and final.regularisation == 0.0
+    assert final.residuals[-1] <= rep.residual_atol
+    assert len(rep.al_iterations) == rep.al_updates + 2  # the passes and the finishing one
     assert res.regions[0]["mean_kPa"] == pytest.approx(_laplace(res) * 1e-3, rel=0.02)
     # the spring anchored at the start carries force until it is gone: the release takes
     # c₀·rᵏ (none skipped as "nothing moved") until its traction is negligible, then 0

@@ -300,8 +300,8 @@ def dress(
     mu = built.mu
     f_ref = _force_scale(built, solver)
     atol = _absolute_tolerance(f_ref, solver)  # deterministic: the same on a resume
-    # the solves on the way (grow, release with a spring, and c = 0 when multiplier passes
-    # follow) stop at the path tolerance; the answer's solves at atol
+    # the solves on the way (grow, release with a spring, multiplier passes) stop at the path
+    # tolerance; the answer's (c = 0, the last pass at the final multipliers) at atol
     path_atol = max(atol, path_tolerance * f_ref)
     if resume is None:
         rep = DressReport()
@@ -431,13 +431,19 @@ def dress(
             rep.al_iterations = al.newton_iterations
             pr.kappa = float(contact.kappa.value)
             if not al.converged:
-                raise DressingFailed(
-                    rep, 0.0,
-                    f"augmented Lagrangian: penetration {al.penetration[-1]:.3g} m not below "
-                    f"{tol:.3g} m after {len(al.penetration) - 1} multiplier updates "
-                    f"(penalty {al.kappa[-1]:.3g} Pa/m)" if al.penetration else
-                    "augmented Lagrangian: the solve after the first multiplier update failed",
-                )  # fmt: skip
+                if not al.penetration:
+                    why = "the solve after the first multiplier update failed"
+                elif not math.isfinite(al.penetration[-1]):
+                    why = (
+                        f"the penetration reached {al.penetration[-2]:.3g} m but the last "
+                        "solve at the final multipliers (to the answer's tolerance) failed"
+                    )
+                else:
+                    why = (
+                        f"penetration {al.penetration[-1]:.3g} m not below {tol:.3g} m after "
+                        f"{updates} multiplier updates (penalty {al.kappa[-1]:.3g} Pa/m)"
+                    )
+                raise DressingFailed(rep, 0.0, f"augmented Lagrangian: {why}")  # fmt: skip
             st.accept_step()
         rep.completed = True
         pr.stage = "done"
