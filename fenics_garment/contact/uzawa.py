@@ -43,7 +43,6 @@ class UzawaReport:
     #: overshot: the plain one), "smaller raise" (κ ×√10 instead of ×10), "no raise"
     recoveries: list[str] = field(default_factory=list)
     tolerance: float = 0.0  # the penetration tolerance [m]
-    finishing: int = 0  # passes at the last multipliers, without an update (scene.dressing)
 
 
 def max_penetration(state: ContactState) -> float:

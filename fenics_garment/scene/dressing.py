@@ -455,12 +455,11 @@ def dress(
 def _finish(al: uzawa.UzawaReport, solve, state) -> None:
     """Converge the answer of a converged multiplier loop to the solver's tolerance (its passes
     ran at the path tolerance): one more pass at the same multipliers, recorded as a pass that
-    updates nothing (``al.finishing``); a failure or a penetration above the tolerance then
+    updates nothing; a failure or a penetration above the tolerance then
     leaves ``al.converged`` false."""
     its, reason = solve()
     al.newton_iterations.append(its)
     al.kappa.append(al.kappa[-1])
-    al.finishing = 1
     pen = uzawa.max_penetration(state) if reason > 0 else math.inf
     al.penetration.append(pen)
     al.converged = pen <= al.tolerance
