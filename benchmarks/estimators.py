@@ -128,6 +128,11 @@ def markdown(d: dict) -> str:
     return "\n".join(out)
 
 
+def _stored() -> dict:
+    """The record as it is (empty when none)."""
+    return json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+
+
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     bad = check_args(argv, __doc__, (), {"--draws"}, ("window",))
@@ -136,7 +141,7 @@ def main(argv: list[str] | None = None) -> int:
     draws = int(argv[argv.index("--draws") + 1]) if "--draws" in argv else DRAWS
     rng = np.random.default_rng(SEED)
     if "window" in argv:
-        data = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+        data = _stored()
         data["window_cases"] = [window_case(p, e, s, draws, rng) for p in ORDERS
                                 for e in ERRORS for s in NOISES[1:4]]  # fmt: skip
         RESULTS.parent.mkdir(exist_ok=True)
@@ -144,7 +149,7 @@ def main(argv: list[str] | None = None) -> int:
         print(window_markdown(data))
         return 0
     cases = [case(p, e, s, draws, rng) for p in ORDERS for e in ERRORS for s in NOISES]
-    old = json.loads(RESULTS.read_text()) if RESULTS.exists() else {}
+    old = _stored()
     data = {
         "draws": draws,
         "seed": SEED,

@@ -73,8 +73,7 @@ def _known(stem: str) -> list[dict]:
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
     release = scene_bench.release_settings()
-    d = config.load(convergence.SCENES / f"{stem}.toml").dressing
-    path = {"path_tolerance": d.path_tolerance, "release_multipliers": d.release_multipliers}
+    path = config.load(convergence.SCENES / f"{stem}.toml").dressing.path()
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
             if r.get("status") == "ok" and r.get("completed")
             and convergence.same_path(r, stem, "default")

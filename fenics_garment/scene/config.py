@@ -201,6 +201,12 @@ class DressingConfig:
     #: release solve), so its scene sets it off, and its path tolerance back to 1e-8
     release_multipliers: bool = True
 
+    def path(self) -> dict:
+        """The settings that decide which solves stop at the path tolerance (recorded in
+        ``summary.json`` as ``dressing_path``; the benchmarks reuse runs of the same path)."""
+        return {"path_tolerance": self.path_tolerance,
+                "release_multipliers": self.release_multipliers}  # fmt: skip
+
 
 @dataclass(frozen=True)
 class SolverConfig:

@@ -406,7 +406,7 @@ def dress(
         with _final_solves(solver):
             _release(
                 pr, built, solver, comm, on_step, on_checkpoint, fixed=fixed, ratio=release_ratio,
-                final_atol=atol, multipliers=kappa,
+                tolerances=(path_atol, atol), multipliers=kappa,
             )  # fmt: skip
         solver.set_atol(atol)
         if augmented_lagrangian is not None:
@@ -485,7 +485,7 @@ def _release(
     *,
     fixed: bool = False,
     ratio: float = DressingConfig.release_ratio,
-    final_atol: float | None = None,
+    tolerances: tuple[float, float] | None = None,
     multipliers: float | None = None,
 ) -> None:
     """Pseudo-transient continuation at s = 0: solve, accept, weaken the spring, until c = 0.
@@ -514,11 +514,16 @@ def _release(
     state is kept with its c (``final_regularisation`` > 0) and the effect is that of its last
     solve. ``pr`` carries the schedule's state (c to try, failures in a row, the last spring
     force), so a resumed run takes the same solves.
+
+    ``tolerances``: (path, answer) absolute Newton tolerances of the solves with a spring and of
+    the c = 0 solve (None: the solver's as it is). ``multipliers``: the penalty κ with which the
+    augmented-Lagrangian multipliers are updated after each release solve with a spring, before
+    one that still has a spring (None: not updated here).
     """
     if built.regularisation.c0 == 0.0:
         return
     _release_loop(
-        pr, built, solver, comm, on_step, on_checkpoint, fixed, ratio, final_atol, multipliers
+        pr, built, solver, comm, on_step, on_checkpoint, fixed, ratio, tolerances, multipliers
     )
 
 
@@ -563,16 +568,15 @@ def _retrying(solver: NonlinearSolver, q, state) -> Callable[[], tuple[int, int]
 
 def _release_loop(
     pr: Progress, built, solver, comm, on_step, on_checkpoint, fixed, ratio: float,
-    final_atol: float | None, multipliers: float | None,
+    tolerances: tuple[float, float] | None, multipliers: float | None,
 ) -> None:  # fmt: skip
     model, contact, reg = built.model, built.contact, built.regularisation
     rep = pr.report
-    path_atol = solver.problem.solver.getTolerances()[1]
     while pr.solves < MAX_RELEASE_SOLVES:
         pr.solves += 1
         c = pr.c
-        if final_atol is not None:
-            solver.set_atol(final_atol if c == 0.0 else path_atol)
+        if tolerances is not None:  # (path, answer): the c = 0 solve is the answer
+            solver.set_atol(tolerances[1] if c == 0.0 else tolerances[0])
         before = contact.pressure_values()
         q_conv = model.q.x.array.copy()
         reg.c.value = c

@@ -639,10 +639,7 @@ def _outputs(
         "dressing": report.as_dict(),
         "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
         "dressing_steps": scene.dressing.steps,
-        "dressing_path": {
-            "path_tolerance": scene.dressing.path_tolerance,
-            "release_multipliers": scene.dressing.release_multipliers,
-        },
+        "dressing_path": scene.dressing.path(),
         # ℓ of the penalty κ̂ E h / ℓ² (0: the garment's largest cell; config.PhysicsConfig)
         "penalty_length_m": scene.physics.penalty_length,
         "time_s": times,
