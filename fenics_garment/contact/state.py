@@ -408,14 +408,13 @@ class ContactState:
     def assign(self, f: dolfinx.fem.Function, expr: ufl.core.expr.Expr) -> None:
         """Set the point Function ``f`` (on ``Qs`` or ``Qv``) to ``expr`` at every owned point,
         then update the ghosts."""
-        values = self.evaluate(expr)
+        self.set_local_values(f, self.evaluate(expr))
+
+    def set_local_values(self, f: dolfinx.fem.Function, values: npt.ArrayLike) -> None:
+        """Set the owned point values of a quadrature Function (on ``Qs`` or ``Qv``; in the
+        order of :meth:`local_values`), then update the ghosts."""
         bs = f.function_space.dofmap.index_map_bs
-        if bs == 1:
-            f.x.array[self._dofs] = values.ravel()
-        else:
-            vals = values.reshape(-1, bs)
-            for k in range(bs):
-                f.x.array[bs * self._dofs + k] = vals[:, k]
+        f.x.array.reshape(-1, bs)[self._dofs] = np.reshape(values, (-1, bs))
         f.x.scatter_forward()
 
     def positions(self) -> F64:

@@ -209,9 +209,10 @@ def outward_from_axis(body: BodySurface):
     return outward
 
 
-def build(scene: Scene, comm: MPI.Comm) -> Built:
-    """Body, garment, shell model, contact, friction, gravity and regularisation of ``scene``."""
-    body = make_body(scene, comm)
+def build(scene: Scene, comm: MPI.Comm, body: BodySurface | None = None) -> Built:
+    """Body, garment, shell model, contact, friction, gravity and regularisation of ``scene``
+    (``body``: the scene's body, made already, e.g. by another garment level of the scene)."""
+    body = make_body(scene, comm) if body is None else body
     garment = make_garment(scene, body, comm)
     mesh = garment.mesh
     W = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))

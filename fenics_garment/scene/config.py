@@ -25,6 +25,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import importlib.util
+import itertools
 import math
 import sys
 import tomllib
@@ -200,6 +201,13 @@ class DressingConfig:
     #: passes are left at c = 0. The loose dress releases worse with it (30 mm: a failed
     #: release solve), so its scene sets it off, and its path tolerance back to 1e-8
     release_multipliers: bool = True
+    #: mesh sequencing (:mod:`.sequence`): garment mesh sizes [m], coarsest first, each larger
+    #: than ``garment.mesh_size``; the whole dressing runs on the first, each level's dressed
+    #: state is carried to the next and to the scene's mesh, where only the settling solves run
+    #: (a release from ``sequence_spring`` × c₀, c = 0, the multiplier passes). [] = off
+    sequence: list[float] = field(default_factory=list)
+    #: the spring constant, as a fraction of c₀, of the first settling solve on a finer level
+    sequence_spring: float = 1e-3
 
     def path(self) -> dict:
         """The settings that decide which solves stop at the path tolerance (recorded in
@@ -536,6 +544,12 @@ def _check(s: Scene) -> None:
     )
     _require(0 < d.release_ratio < 1, src, "dressing.release_ratio",
              f"must be in (0, 1), got {d.release_ratio}")  # fmt: skip
+    seq = [*d.sequence, s.garment.mesh_size]
+    _require(all(a > b for a, b in itertools.pairwise(seq)), src, "dressing.sequence",
+             "must be garment mesh sizes [m], coarsest first, each larger than "
+             f"garment.mesh_size = {s.garment.mesh_size:g}; got {d.sequence}")  # fmt: skip
+    _require(0 <= d.sequence_spring <= 1, src, "dressing.sequence_spring",
+             f"is a fraction of c₀ in [0, 1], got {d.sequence_spring}")  # fmt: skip
     _one_of(s.solver.linear, tuple(LINEAR_SOLVERS), src, "solver.linear")
     o = s.output
     _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",

@@ -99,6 +99,8 @@ class DressReport:
     al_recoveries: list[str] = field(default_factory=list)  # after failed passes (uzawa)
     al_iterations: list[int] = field(default_factory=list)  # Newton its of each pass (uzawa)
     completed: bool = False
+    #: the coarser garment levels this dressing started from (``scene.sequence``), coarsest first
+    levels: list[dict] = field(default_factory=list)
 
     @property
     def newton_iterations(self) -> int:
@@ -136,6 +138,7 @@ class DressReport:
             "augmented_lagrangian_newton_iterations": self.al_iterations,
             "all_newton_iterations": self.all_newton_iterations,
             "completed": self.completed,
+            "sequence": self.levels,
         }
 
 
@@ -305,7 +308,6 @@ def dress(
     path_atol = max(atol, path_tolerance * f_ref)
     if resume is None:
         rep = DressReport()
-        rep.residual_atol = atol
         rep.penetration0 = initial_penetration(contact)
         s0 = max(rep.penetration0, 0.0) + margin
         rep.shrink0 = s0
@@ -323,6 +325,7 @@ def dress(
         st.shrink.value = pr.shrink
         reg.c.value = pr.c
         st.refresh()
+    rep.residual_atol = atol
     s0 = rep.shrink0
     grid = s0 / steps if first_step is None else first_step * s0  # the fixed schedule's step
     if mu is not None and not friction_while_growing and pr.stage == "grow":

@@ -41,7 +41,7 @@ from fenics_garment.contact import uzawa
 from fenics_garment.geometry import surface
 from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.scene import build as scene_build
-from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight
+from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight, sequence
 from fenics_garment.scene import folder as run_folder
 from fenics_garment.scene.dressing import (
     RELEASE_TOLERANCE,
@@ -405,12 +405,20 @@ def _run_in(
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
     built = build_stage(scene, comm, say, times, check=meta is None)
-    for hook in (config.load_terms(scene.physics.terms, scene.source), terms):
-        if hook is not None:
-            hook(built)
+    hooks = [h for h in (config.load_terms(scene.physics.terms, scene.source), terms) if h]
+
+    def edit(b: scene_build.Built) -> None:
+        for hook in hooks:
+            hook(b)
+
+    edit(built)
     tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
+    start = None
+    if meta is None:
+        start = sequence_stage(built, say, times, edit, first_step=first_step)
+        first_step = None if start is not None else first_step
     solved = solve_stage(built, folder, recorded, meta, say, times, first_step=first_step,
-                         checkpoints=checkpoints)  # fmt: skip
+                         checkpoints=checkpoints, start=start)  # fmt: skip
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
@@ -430,13 +438,16 @@ def build_stage(
     times: dict[str, float] | None = None,
     *,
     check: bool = True,
+    body=None,
 ) -> scene_build.Built:
     """Stage 1: the problem of ``scene`` (:func:`fenics_garment.scene.build.build`), checked
-    (``check``: ``scene.preflight``) but not yet compiled: edit it before :func:`solve_stage`."""
+    (``check``: ``scene.preflight``) but not yet compiled: edit it before :func:`solve_stage`.
+    ``body``: the scene's body when it is made already (another garment level)."""
     t0 = time.perf_counter()
-    say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
-        f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
-    built = scene_build.build(scene, comm)
+    if body is None:
+        say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
+            f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
+    built = scene_build.build(scene, comm, body)
     elapsed = time.perf_counter() - t0
     if times is not None:
         times["geometry_and_model"] = elapsed
@@ -469,19 +480,19 @@ def solve_stage(
     *,
     first_step: float | None = None,
     checkpoints: bool = True,
+    start: Progress | None = None,
 ) -> Solved:
     """Stage 2: compile the residual of the problem as it is now and dress (VTX frames and
-    checkpoints on the way; ``meta``: the checkpoint to resume from)."""
+    checkpoints on the way; ``meta``: the checkpoint to resume from; ``start``: where a fresh
+    dressing starts, the state already in the model: :func:`sequence_stage`)."""
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
-    opts = {**SCENE_SNES_OPTIONS, **LINEAR_SOLVERS[scene.solver.linear], **scene.solver.petsc}
-    solver = NonlinearSolver(built.model, built.bcs, **built.contact.solver_hooks(),
-                             petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
+    solver = scene_solver(built)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    progress = None
+    progress = start
     if meta is not None:
         progress = checkpoint.restore(built, folder, meta)
         frames.k = len(progress.report.steps)
@@ -505,6 +516,66 @@ def solve_stage(
         frames.write()
     frames.close(comm)
     return Solved(solver, report, completed, message)
+
+
+def scene_solver(built: scene_build.Built) -> NonlinearSolver:
+    """Newton on the problem of ``built`` with the scene's solver settings and contact hooks."""
+    scene = built.scene
+    opts = {**SCENE_SNES_OPTIONS, **LINEAR_SOLVERS[scene.solver.linear], **scene.solver.petsc}
+    return NonlinearSolver(built.model, built.bcs, **built.contact.solver_hooks(),
+                           petsc_options=opts, prefix=f"scene{id(built)}_")  # fmt: skip
+
+
+def sequence_stage(
+    built: scene_build.Built,
+    say: Callable[..., object],
+    times: dict[str, float],
+    edit: Callable[[scene_build.Built], None],
+    *,
+    first_step: float | None = None,
+) -> Progress | None:
+    """Mesh sequencing (``[dressing] sequence``, :mod:`fenics_garment.scene.sequence`): dress on
+    each coarser garment mesh in turn (``edit``: the scene's terms hooks, applied to every level
+    as to ``built``), carry each dressed state to the next level and the last into ``built``.
+    Returns where ``built``'s dressing starts, or None: no sequence, or a coarser level did not
+    dress (then ``built`` is dressed from the start, and the run says so)."""
+    scene = built.scene
+    if not scene.dressing.sequence:
+        return None
+    comm = built.model.geometry.mesh.comm
+    t0 = time.perf_counter()
+    levels: list[dict] = []
+    previous = None
+    for level_scene in sequence.coarse_scenes(scene):
+        h = level_scene.garment.mesh_size
+        t1 = time.perf_counter()
+        level = build_stage(level_scene, comm, say, body=built.body)
+        edit(level)
+        solver = scene_solver(level)
+        start = None
+        if previous is not None:
+            sequence.carry_over(previous, level)
+            start = sequence.settling(level, previous, levels)
+        say(f"  level {h * 1e3:.1f} mm of the mesh sequence ({level.dofs} dofs):")
+        report, completed, message = _dress(
+            level, solver, _Frames(level, Path("."), False), None, start,
+            first_step if previous is None else None, say,
+        )  # fmt: skip
+        levels.append({"mesh_size_m": h, "dofs": level.dofs, "completed": completed,
+                       "solves": len(report.steps), "newton_iterations": report.newton_iterations,
+                       "all_newton_iterations": report.all_newton_iterations,
+                       "failed_attempts": len(report.failures),
+                       "seconds": time.perf_counter() - t1})  # fmt: skip
+        if not completed:
+            say(f"  level {h * 1e3:.1f} mm did not dress ({message}): dressing on the scene's "
+                "mesh from the start")  # fmt: skip
+            times["sequence"] = time.perf_counter() - t0
+            return None
+        previous = level
+    sequence.carry_over(previous, built)
+    times["sequence"] = time.perf_counter() - t0
+    say(f"  carried over to the scene's mesh ({times['sequence']:.1f} s for the coarser levels)")
+    return sequence.settling(built, previous, levels)
 
 
 def write_stage(
