@@ -98,6 +98,8 @@ def child(spec: dict) -> dict:
 
     comm = MPI.COMM_WORLD
     s = config.load(spec.get("scene", GILET))
+    if not spec.get("sequence"):  # the mesh studies measure the direct path on every mesh
+        s = replace(s, dressing=replace(s.dressing, sequence=[]))
     variant = spec.get("variant", "default")
     g = replace(s.garment, mesh_size=spec["mesh_size"])
     if "per_turn" in spec:  # limbs: elements per turn of curvature (benchmarks/convergence.py)
@@ -267,6 +269,9 @@ def _record(res, spec: dict, comm) -> dict:
         "grow_steps": sm.get("dressing_steps"),
         # path tolerance and multiplier updates in the release (absent: LEGACY_PATH)
         "dressing_path": sm.get("dressing_path", LEGACY_PATH),
+        # the coarser garment levels of a mesh sequence (scene.sequence) and their time
+        "sequence": sm["dressing"].get("sequence", []),
+        "sequence_s": tm.get("sequence", 0.0),
         "penalty_length": sm.get("penalty_length_m"),  # absent: κ scaled by the cells
         # the release as the code ran it (benchmarks/sweep.py reuses runs of the same release)
         "release": release_settings(),

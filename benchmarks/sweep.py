@@ -22,6 +22,7 @@ import json
 import math
 import os
 import sys
+from dataclasses import replace
 
 from benchmarks import check_args, convergence
 from benchmarks import scenes as scene_bench
@@ -73,7 +74,8 @@ def _known(stem: str) -> list[dict]:
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {}).get(stem, {})
     mine = _load(RESULTS).get("scenes", {}).get(stem, {})
     release = scene_bench.release_settings()
-    path = config.load(convergence.SCENES / f"{stem}.toml").dressing.path()
+    shipped = config.load(convergence.SCENES / f"{stem}.toml").dressing
+    path = replace(shipped, sequence=[]).path()  # the sweep runs the direct path
     return [r for r in conv.get("runs", []) + mine.get("runs", [])
             if r.get("status") == "ok" and r.get("completed")
             and convergence.same_path(r, stem, "default")

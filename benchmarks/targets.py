@@ -367,7 +367,7 @@ def measure(say=print) -> list[dict]:
     recs = []
     for stem in DEMO_SCENES:
         spec = {"scene": str(ROOT / "fenics_garment" / "scenes" / f"{stem}.toml"),
-                "mesh_size": default_mesh(stem)}  # fmt: skip
+                "mesh_size": default_mesh(stem), "sequence": True}  # fmt: skip
         r = {**scene_bench.spawn(spec, ranks=2), "stem": stem}
         say(f"{stem}: {r.get('status')} {r.get('warm_wall_s', float('nan')):.1f} s warm")
         recs.append(r)

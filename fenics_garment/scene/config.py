@@ -211,9 +211,13 @@ class DressingConfig:
 
     def path(self) -> dict:
         """The settings that decide which solves stop at the path tolerance (recorded in
-        ``summary.json`` as ``dressing_path``; the benchmarks reuse runs of the same path)."""
-        return {"path_tolerance": self.path_tolerance,
+        ``summary.json`` as ``dressing_path``; the benchmarks reuse runs of the same path), and
+        the mesh sequence when there is one."""
+        path = {"path_tolerance": self.path_tolerance,
                 "release_multipliers": self.release_multipliers}  # fmt: skip
+        if self.sequence:
+            path |= {"sequence": list(self.sequence), "sequence_spring": self.sequence_spring}
+        return path
 
 
 @dataclass(frozen=True)
