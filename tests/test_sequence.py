@@ -127,3 +127,24 @@ def test_sequenced_tube_on_two_ranks():
     res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
     assert res.completed and res.checks_passed and res.summary["ranks"] == MPI.COMM_WORLD.size
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
+
+
+def test_a_state_that_does_not_settle_is_dressed_directly(monkeypatch):
+    """A carried state the scene's mesh cannot settle from (here the displacement made 40×
+    too large after the carry-over) is not an answer: the run says so, dresses the scene's mesh
+    from the start and gets Laplace's free-end value as without a sequence."""
+    carry = sequence.carry_over
+
+    def broken(coarse, fine):
+        carry(coarse, fine)
+        fine.model.q.x.array[:] *= 40.0
+        fine.model.q.x.scatter_forward()
+
+    monkeypatch.setattr(sequence, "carry_over", broken)
+    res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
+    assert res.completed and res.checks_passed
+    rep = res.report
+    assert rep.settling_failed and rep.levels[0]["completed"]
+    assert res.summary["dressing"]["sequence_settling_failed"] == rep.settling_failed
+    assert any(st.stage == "dress" for st in rep.steps)  # the body grew again on this mesh
+    assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)

@@ -101,6 +101,8 @@ class DressReport:
     completed: bool = False
     #: the coarser garment levels this dressing started from (``scene.sequence``), coarsest first
     levels: list[dict] = field(default_factory=list)
+    #: why the settling of the carried state failed, when it did (the dressing then ran directly)
+    settling_failed: str = ""
 
     @property
     def newton_iterations(self) -> int:
@@ -139,6 +141,7 @@ class DressReport:
             "all_newton_iterations": self.all_newton_iterations,
             "completed": self.completed,
             "sequence": self.levels,
+            "sequence_settling_failed": self.settling_failed,
         }
 
 

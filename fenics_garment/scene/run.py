@@ -499,9 +499,23 @@ def solve_stage(
         say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
             f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
     ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0)
+    kappa0 = float(built.contact.kappa.value)
     try:
         report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
                                             progress, first_step, say)  # fmt: skip
+        if start is not None and (not completed or report.final_regularisation > 0.0):
+            # the carried state did not settle on this mesh (or only with the spring that
+            # holds it there): dress it directly, as without a sequence (the coarser levels
+            # stay in the report; the run says why)
+            message = message or "the spring anchored at the carried state was not released"
+            say(f"  the settling on the scene's mesh failed ({message}): dressing it from the "
+                "start")  # fmt: skip
+            sequence.reset(built, kappa0)
+            levels, why = report.levels, message
+            report, completed, message = _dress(built, solver, frames,
+                                                ckpt if checkpoints else None, None, first_step,
+                                                say)  # fmt: skip
+            report.levels, report.settling_failed = levels, why
     except output.OutputError:
         frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
         raise
@@ -555,7 +569,8 @@ def sequence_stage(
         start = None
         if previous is not None:
             sequence.carry_over(previous, level)
-            start = sequence.settling(level, previous, levels)
+            start = sequence.settling(level, levels, levels[-1]["stiffening"])
+        kappa0 = float(level.contact.kappa.value)
         say(f"  level {h * 1e3:.1f} mm of the mesh sequence ({level.dofs} dofs):")
         report, completed, message = _dress(
             level, solver, _Frames(level, Path("."), False), None, start,
@@ -565,6 +580,7 @@ def sequence_stage(
                        "solves": len(report.steps), "newton_iterations": report.newton_iterations,
                        "all_newton_iterations": report.all_newton_iterations,
                        "failed_attempts": len(report.failures),
+                       "stiffening": float(level.contact.kappa.value) / kappa0,
                        "seconds": time.perf_counter() - t1})  # fmt: skip
         if not completed:
             say(f"  level {h * 1e3:.1f} mm did not dress ({message}): dressing on the scene's "
@@ -575,7 +591,7 @@ def sequence_stage(
     sequence.carry_over(previous, built)
     times["sequence"] = time.perf_counter() - t0
     say(f"  carried over to the scene's mesh ({times['sequence']:.1f} s for the coarser levels)")
-    return sequence.settling(built, previous, levels)
+    return sequence.settling(built, levels, levels[-1]["stiffening"])
 
 
 def write_stage(

@@ -133,14 +133,26 @@ class SequenceError(ValueError):
     """The garment levels of a mesh sequence do not fit together."""
 
 
-def settling(fine, coarse, levels: list[dict]) -> Progress:
-    """Where the dressing of ``fine`` starts once the state of ``coarse`` is carried over: the
+def settling(fine, levels: list[dict], stiffening: float = 1.0) -> Progress:
+    """Where the dressing of ``fine`` starts once a coarser level's state is carried over: the
     release, at ``sequence_spring`` × c₀ (the spring anchored at the carried state), with
-    friction on and the contact penalty as the coarse level's multiplier passes left it;
-    ``levels``: the coarser levels' records (``DressReport.levels``)."""
+    friction on and the contact penalty raised by the factor ``stiffening`` by which the coarser
+    level's multiplier passes raised theirs; ``levels``: the coarser levels' records
+    (``DressReport.levels``)."""
     c = fine.scene.dressing.sequence_spring * fine.regularisation.c0
     report = DressReport(levels=levels, final_regularisation=c)
     mu = float(fine.mu.value) if fine.mu is not None else 0.0
-    kappa = coarse.contact.kappa
-    return Progress(report, stage="release", c=c, mu=mu,
-                    kappa=float(kappa.value) if kappa is not None else 0.0)  # fmt: skip
+    kappa = stiffening * float(fine.contact.kappa.value)
+    return Progress(report, stage="release", c=c, mu=mu, kappa=kappa)
+
+
+def reset(built, kappa: float) -> None:
+    """Put ``built`` back to the undressed pattern with the contact penalty ``kappa`` (after a
+    settling that failed, before the direct dressing)."""
+    st, reg = built.contact.state, built.regularisation
+    for f in (built.model.q, st.lam, st.u_old, st.u_k, reg.q_prev):
+        f.x.array[:] = 0.0
+        f.x.scatter_forward()
+    built.contact.kappa.value = kappa
+    reg.c.value = reg.c0
+    st.refresh()
