@@ -98,8 +98,11 @@ def child(spec: dict) -> dict:
 
     comm = MPI.COMM_WORLD
     s = config.load(spec.get("scene", GILET))
-    if not spec.get("sequence"):  # the mesh studies measure the direct path on every mesh
-        s = replace(s, dressing=replace(s.dressing, sequence=[]))
+    # the mesh studies measure the direct path on every mesh; "sequence": true keeps the scene's
+    # mesh sequence, a list sets one (benchmarks/sequence.py)
+    seq = spec.get("sequence")
+    if seq is not True:
+        s = replace(s, dressing=replace(s.dressing, sequence=list(seq or [])))
     variant = spec.get("variant", "default")
     g = replace(s.garment, mesh_size=spec["mesh_size"])
     if "per_turn" in spec:  # limbs: elements per turn of curvature (benchmarks/convergence.py)
