@@ -163,6 +163,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [estimators_markdown(d), ""]
             continue
+        if name == "sequence":  # mesh sequencing against the direct dressing (sequence.py)
+            from benchmarks.sequence import markdown as sequence_markdown
+
+            parts += [sequence_markdown(d), ""]
+            continue
         if name == "smooth_body":  # faceted vs smooth body (benchmarks/smooth_body.py)
             from benchmarks.smooth_body import markdown
 

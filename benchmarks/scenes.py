@@ -151,8 +151,8 @@ def child(spec: dict) -> dict:
                 output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
     original = scene_build.build
 
-    def patched(scene, comm_):
-        built = original(scene, comm_)
+    def patched(scene, comm_, body=None):
+        built = original(scene, comm_, body)
         if variant == "friction-term-mu0":
             built.contact.friction.mu.value = 0.0
         if variant == "gravity-term-g0":

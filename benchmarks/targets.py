@@ -132,16 +132,22 @@ def per_newton_ms(r: dict) -> dict[str, float]:
 
 def all_solves(r: dict) -> tuple[int, int]:
     """(Newton iterations, solves) of the whole dressing: the accepted solves, the failed tries
-    and the augmented Lagrangian's passes (older records: the accepted solves only)."""
+    and the augmented Lagrangian's passes, on the scene's mesh and on the coarser levels of a
+    mesh sequence (older records: the accepted solves only)."""
     if r.get("all_newton_its") is None:
         return r["newton_its"], r["solves"]
-    return r["all_newton_its"], r["solves"] + r["failed_attempts"] + len(r.get("al_its") or [])
+    its = r["all_newton_its"] + sum(lv["all_newton_iterations"] for lv in r.get("sequence", []))
+    solves = r["solves"] + r["failed_attempts"] + len(r.get("al_its") or [])
+    solves += sum(lv["solves"] + lv["failed_attempts"] + lv.get("multiplier_passes", 0)
+                  for lv in r.get("sequence", []))  # fmt: skip
+    return its, solves
 
 
 def _src(r: dict, what: str = "") -> str:
     what = what if not r.get("source") else r["source"]
     load = (r.get("loadavg") or [math.nan])[0]
-    return f"{what}, h = {1e3 * r['mesh_size']:.1f} mm, {r['dofs']} dofs, load {load:.1f}"
+    via = "".join(f" via {1e3 * lv['mesh_size_m']:.1f} mm" for lv in r.get("sequence", []))
+    return f"{what}, h = {1e3 * r['mesh_size']:.1f} mm{via}, {r['dofs']} dofs, load {load:.1f}"
 
 
 def rows() -> list[tuple[str, str, str, str, str]]:

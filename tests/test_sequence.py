@@ -148,3 +148,22 @@ def test_a_state_that_does_not_settle_is_dressed_directly(monkeypatch):
     assert res.summary["dressing"]["sequence_settling_failed"] == rep.settling_failed
     assert any(st.stage == "dress" for st in rep.steps)  # the body grew again on this mesh
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
+
+
+def test_a_coarse_level_that_does_not_dress_is_left_out(monkeypatch):
+    """A coarser level whose dressing stops (here: one Newton iteration allowed, no cut) leaves
+    the scene's mesh to be dressed from the start; the report keeps the level and says why."""
+    levels = sequence.coarse_scenes
+
+    def failing(scene):
+        stop = config.SolverConfig(petsc={"snes_max_it": 1})
+        return [replace(s, solver=stop, dressing=replace(s.dressing, max_cuts=0))
+                for s in levels(scene)]  # fmt: skip
+
+    monkeypatch.setattr(sequence, "coarse_scenes", failing)
+    res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
+    assert res.completed and res.checks_passed
+    rep = res.report
+    assert not rep.levels[0]["completed"] and "did not dress" in rep.settling_failed
+    assert any(st.stage == "dress" for st in rep.steps)
+    assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)

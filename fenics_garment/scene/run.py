@@ -413,12 +413,15 @@ def _run_in(
 
     edit(built)
     tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
-    start = None
+    start, levels = None, []
     if meta is None:
-        start = sequence_stage(built, say, times, edit, first_step=first_step)
+        start, levels = sequence_stage(built, say, times, edit, first_step=first_step)
         first_step = None if start is not None else first_step
     solved = solve_stage(built, folder, recorded, meta, say, times, first_step=first_step,
                          checkpoints=checkpoints, start=start)  # fmt: skip
+    if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
+        solved.report.levels = levels
+        solved.report.settling_failed = levels[-1]["message"]
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
@@ -547,15 +550,16 @@ def sequence_stage(
     edit: Callable[[scene_build.Built], None],
     *,
     first_step: float | None = None,
-) -> Progress | None:
+) -> tuple[Progress | None, list[dict]]:
     """Mesh sequencing (``[dressing] sequence``, :mod:`fenics_garment.scene.sequence`): dress on
     each coarser garment mesh in turn (``edit``: the scene's terms hooks, applied to every level
     as to ``built``), carry each dressed state to the next level and the last into ``built``.
-    Returns where ``built``'s dressing starts, or None: no sequence, or a coarser level did not
-    dress (then ``built`` is dressed from the start, and the run says so)."""
+    Returns where ``built``'s dressing starts — None: no sequence, or a coarser level did not
+    dress (then ``built`` is dressed from the start, and the run says so) — and the coarser
+    levels' records."""
     scene = built.scene
     if not scene.dressing.sequence:
-        return None
+        return None, []
     comm = built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     levels: list[dict] = []
@@ -580,18 +584,19 @@ def sequence_stage(
                        "solves": len(report.steps), "newton_iterations": report.newton_iterations,
                        "all_newton_iterations": report.all_newton_iterations,
                        "failed_attempts": len(report.failures),
+                       "multiplier_passes": len(report.al_iterations),
                        "stiffening": float(level.contact.kappa.value) / kappa0,
                        "seconds": time.perf_counter() - t1})  # fmt: skip
         if not completed:
-            say(f"  level {h * 1e3:.1f} mm did not dress ({message}): dressing on the scene's "
-                "mesh from the start")  # fmt: skip
+            levels[-1]["message"] = f"level {h * 1e3:.1f} mm did not dress: {message}"
+            say(f"  {levels[-1]['message']}; dressing on the scene's mesh from the start")
             times["sequence"] = time.perf_counter() - t0
-            return None
+            return None, levels
         previous = level
     sequence.carry_over(previous, built)
     times["sequence"] = time.perf_counter() - t0
     say(f"  carried over to the scene's mesh ({times['sequence']:.1f} s for the coarser levels)")
-    return sequence.settling(built, levels, levels[-1]["stiffening"])
+    return sequence.settling(built, levels, levels[-1]["stiffening"]), levels
 
 
 def write_stage(
