@@ -8,8 +8,10 @@ that run. Times on this shared 2-core machine are only comparable within one run
 are.
 
     python -m benchmarks.targets              # print the table (also a section of REPORT.md)
-    python -m benchmarks.targets measure      # run the three demo scenes at their shipped mesh
-                                              # (2 ranks, warm) and store them in targets.json
+    python -m benchmarks.targets measure [--rounds N]
+                                              # run the three demo scenes at their shipped mesh
+                                              # (2 ranks, warm; N interleaved rounds, default 2,
+                                              # each scene's fastest kept) into targets.json
     python -m benchmarks.targets fresh-demo   # clone this repository into a temporary folder,
                                               # time `make demo` there, store it in targets.json
 
@@ -173,11 +175,13 @@ def rows() -> list[tuple[str, str, str, str, str]]:
             )
             continue
         t = r["warm_wall_s"]
+        rounds = [x for x in r.get("warm_wall_s_rounds", []) if x is not None]
+        spread = f"; rounds {' / '.join(f'{x:.1f}' for x in rounds)} s" if len(rounds) > 1 else ""
         out.append(
             (
                 f"1. {s} end to end, warm, 2 ranks",
                 f"≤ {END_TO_END_S:.0f} s",
-                f"{t:.1f} s ({t / END_TO_END_S:.2f}× the target)",
+                f"{t:.1f} s ({t / END_TO_END_S:.2f}× the target{spread})",
                 "yes" if t <= END_TO_END_S else "no",
                 _src(r, "sweep.json"),
             )
@@ -366,28 +370,39 @@ def fresh_demo(say=print) -> dict:
         shutil.rmtree(tmp, ignore_errors=True)
 
 
-def measure(say=print) -> list[dict]:
-    """The demo scenes at their shipped mesh, 2 ranks, one after the other (warm JIT cache)."""
+def measure(say=print, rounds: int = 2) -> list[dict]:
+    """The demo scenes at their shipped mesh, 2 ranks, one after the other (warm JIT cache), in
+    ``rounds`` interleaved rounds: each scene's fastest run is kept (as every time in REPORT.md,
+    the fastest of the repeats: this shared machine's speed drifts by 10–15 % over minutes),
+    with the times of all its rounds (``warm_wall_s_rounds``)."""
     from benchmarks import scenes as scene_bench
 
+    runs: dict[str, list[dict]] = {stem: [] for stem in DEMO_SCENES}
+    for k in range(rounds):
+        for stem in DEMO_SCENES:
+            spec = {"scene": str(ROOT / "fenics_garment" / "scenes" / f"{stem}.toml"),
+                    "mesh_size": default_mesh(stem), "sequence": True}  # fmt: skip
+            r = {**scene_bench.spawn(spec, ranks=2), "stem": stem}
+            say(f"{stem} (round {k + 1}): {r.get('status')} "
+                f"{r.get('warm_wall_s', float('nan')):.1f} s warm")  # fmt: skip
+            runs[stem].append(r)
     recs = []
-    for stem in DEMO_SCENES:
-        spec = {"scene": str(ROOT / "fenics_garment" / "scenes" / f"{stem}.toml"),
-                "mesh_size": default_mesh(stem), "sequence": True}  # fmt: skip
-        r = {**scene_bench.spawn(spec, ranks=2), "stem": stem}
-        say(f"{stem}: {r.get('status')} {r.get('warm_wall_s', float('nan')):.1f} s warm")
-        recs.append(r)
+    for stem, rs in runs.items():
+        ok = [r for r in rs if r.get("status") == "ok"]
+        best = min(ok, key=lambda r: r["warm_wall_s"]) if ok else rs[-1]
+        recs.append({**best, "warm_wall_s_rounds": [r.get("warm_wall_s") for r in rs]})
     return recs
 
 
 def main(argv: list[str] | None = None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
-    bad = check_args(argv, __doc__, (), (), ("measure", "fresh-demo"))
+    bad = check_args(argv, __doc__, (), ("--rounds",), ("measure", "fresh-demo"))
     if bad is not None:
         return bad
+    rounds = int(argv[argv.index("--rounds") + 1]) if "--rounds" in argv else 2
     if argv[:1] == ["measure"]:
         data = _read("targets")
-        data["demo_runs"] = measure()
+        data["demo_runs"] = measure(rounds=rounds)
         RESULTS.mkdir(exist_ok=True)
         (RESULTS / "targets.json").write_text(json.dumps(data, indent=1, default=float))
     if argv[:1] == ["fresh-demo"]:
