@@ -387,7 +387,7 @@ def measure(say=print, rounds: int = 2) -> list[dict]:
                 f"{r.get('warm_wall_s', float('nan')):.1f} s warm")  # fmt: skip
             runs[stem].append(r)
     recs = []
-    for stem, rs in runs.items():
+    for rs in runs.values():
         ok = [r for r in rs if r.get("status") == "ok"]
         best = min(ok, key=lambda r: r["warm_wall_s"]) if ok else rs[-1]
         recs.append({**best, "warm_wall_s_rounds": [r.get("warm_wall_s") for r in rs]})
