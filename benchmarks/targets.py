@@ -399,7 +399,11 @@ def main(argv: list[str] | None = None) -> int:
     bad = check_args(argv, __doc__, (), ("--rounds",), ("measure", "fresh-demo"))
     if bad is not None:
         return bad
-    rounds = int(argv[argv.index("--rounds") + 1]) if "--rounds" in argv else 2
+    rounds = argv[argv.index("--rounds") + 1] if "--rounds" in argv else "2"
+    if not rounds.isdigit() or int(rounds) < 1:
+        print(f"--rounds takes a whole number ≥ 1, got {rounds!r}")
+        return 2
+    rounds = int(rounds)
     if argv[:1] == ["measure"]:
         data = _read("targets")
         data["demo_runs"] = measure(rounds=rounds)
