@@ -167,3 +167,14 @@ def test_a_coarse_level_that_does_not_dress_is_left_out(monkeypatch):
     assert not rep.levels[0]["completed"] and "did not dress" in rep.settling_failed
     assert any(st.stage == "dress" for st in rep.steps)
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
+
+
+def test_levels_that_are_not_one_surface_are_refused(monkeypatch):
+    """A fine point farther from the coarse mesh than ``sequence.PADDING`` (here 1 nm: the two
+    quadratic meshes of the cylinder differ by more) stops the carry-over on every rank; the
+    scene's mesh is then dressed from the start and the report says why."""
+    monkeypatch.setattr(sequence, "PADDING", 1e-9)
+    res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
+    assert res.completed and "could not be carried over" in res.report.settling_failed
+    assert any(st.stage == "dress" for st in res.report.steps)
+    assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)

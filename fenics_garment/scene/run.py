@@ -572,7 +572,8 @@ def sequence_stage(
         solver = scene_solver(level)
         start = None
         if previous is not None:
-            sequence.carry_over(previous, level)
+            if (why := _carry(previous, level)) is not None:
+                return _unsequenced(built, levels, why, say, times, t0)
             start = sequence.settling(level, levels, levels[-1]["stiffening"])
         kappa0 = float(level.contact.kappa.value)
         say(f"  level {h * 1e3:.1f} mm of the mesh sequence ({level.dofs} dofs):")
@@ -588,15 +589,36 @@ def sequence_stage(
                        "stiffening": float(level.contact.kappa.value) / kappa0,
                        "seconds": time.perf_counter() - t1})  # fmt: skip
         if not completed:
-            levels[-1]["message"] = f"level {h * 1e3:.1f} mm did not dress: {message}"
-            say(f"  {levels[-1]['message']}; dressing on the scene's mesh from the start")
-            times["sequence"] = time.perf_counter() - t0
-            return None, levels
+            why = f"level {h * 1e3:.1f} mm did not dress: {message}"
+            return _unsequenced(built, levels, why, say, times, t0)
         previous = level
-    sequence.carry_over(previous, built)
+    if (why := _carry(previous, built)) is not None:
+        return _unsequenced(built, levels, why, say, times, t0)
     times["sequence"] = time.perf_counter() - t0
     say(f"  carried over to the scene's mesh ({times['sequence']:.1f} s for the coarser levels)")
     return sequence.settling(built, levels, levels[-1]["stiffening"]), levels
+
+
+def _carry(coarse: scene_build.Built, fine: scene_build.Built) -> str | None:
+    """:func:`sequence.carry_over`; the reason when the levels do not fit together (the same on
+    every rank), else None."""
+    try:
+        sequence.carry_over(coarse, fine)
+    except sequence.SequenceError as err:
+        return f"the state could not be carried over: {err}"
+    return None
+
+
+def _unsequenced(
+    built: scene_build.Built, levels: list[dict], why: str, say, times: dict, t0: float
+) -> tuple[None, list[dict]]:
+    """The mesh sequence stops (``why``): ``built`` goes back to the undressed pattern, to be
+    dressed from the start; the levels' records carry the reason."""
+    sequence.reset(built, float(built.contact.kappa.value))
+    levels[-1]["message"] = why
+    say(f"  {why}; dressing on the scene's mesh from the start")
+    times["sequence"] = time.perf_counter() - t0
+    return None, levels
 
 
 def write_stage(

@@ -16,10 +16,11 @@ What is carried over (:func:`carry_over`):
 * the displacement and rotation: the coarse fields interpolated into the fine spaces (evaluated
   at the fine element's interpolation points, each projected onto the nearest coarse cell, at
   most :data:`PADDING` away: :class:`_Coarse`);
-* the contact state at each fine contact point, from the coarse contact point nearest in the
-  reference configuration: the augmented-Lagrangian multiplier and the friction's elastic slip
-  e = u_k − u_old (the anchor is then u_old = u_k − e, so a sticking point carries its tangential
-  traction on, as between two accepted steps: ``ContactState.accept_step``);
+* the contact state at each fine contact point, interpolated the same way from the coarse
+  contact points (those of the nodal rules are Lagrange nodes: :func:`_nodal_field`): the
+  augmented-Lagrangian multiplier and the friction's elastic slip e = u_k − u_old (the anchor is
+  then u_old = u_k − e, so a sticking point carries its tangential traction on, as between two
+  accepted steps: ``ContactState.accept_step``), and the penalty raise of the coarse passes;
 * the spring's anchor: the carried state.
 
 With friction the answer depends on the path; here the path is the coarse mesh's and the fine
@@ -49,7 +50,7 @@ def coarse_scenes(scene: Scene) -> list[Scene]:
     """The scene at each garment mesh size of ``[dressing] sequence``, coarsest first, with no
     outputs and no sequence of their own."""
     out = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
-    d = replace(scene.dressing, sequence=())
+    d = replace(scene.dressing, sequence=[])
     g = scene.garment
 
     def level(h: float) -> Scene:
