@@ -558,7 +558,7 @@ def sequence_stage(
     dress (then ``built`` is dressed from the start, and the run says so) — and the coarser
     levels' records."""
     scene = built.scene
-    if not scene.dressing.sequence:
+    if not sequence.coarse_scenes(scene):
         return None, []
     comm = built.model.geometry.mesh.comm
     t0 = time.perf_counter()

@@ -47,8 +47,10 @@ PADDING = 2e-3
 
 
 def coarse_scenes(scene: Scene) -> list[Scene]:
-    """The scene at each garment mesh size of ``[dressing] sequence``, coarsest first, with no
-    outputs and no sequence of their own."""
+    """The scene at each garment mesh size of ``[dressing] sequence`` that is coarser than the
+    scene's own (the loader requires all to be; a scene made coarser in code, e.g. the coarse
+    level of ``--error-bars``, drops the rest), coarsest first, with no outputs and no sequence
+    of their own."""
     out = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
     d = replace(scene.dressing, sequence=[])
     g = scene.garment
@@ -58,7 +60,7 @@ def coarse_scenes(scene: Scene) -> list[Scene]:
         return replace(scene, garment=replace(g, mesh_size=h, per_turn=per_turn),
                        dressing=d, output=out)  # fmt: skip
 
-    return [level(h) for h in scene.dressing.sequence]
+    return [level(h) for h in scene.dressing.sequence if h > g.mesh_size]
 
 
 #: Candidate coarse cells per point (nearest by the centroid of their nodes) and Gauss–Newton
