@@ -178,3 +178,11 @@ def test_levels_that_are_not_one_surface_are_refused(monkeypatch):
     assert res.completed and "could not be carried over" in res.report.settling_failed
     assert any(st.stage == "dress" for st in res.report.steps)
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
+
+
+def test_levels_not_coarser_than_the_scene_are_dropped():
+    """A scene made coarser in code than its sequence's levels (as ``--error-bars`` makes its
+    coarse level) is dressed without them."""
+    assert [s.garment.mesh_size for s in sequence.coarse_scenes(_tube(0.02, sequence=[0.04]))] \
+        == [0.04]  # fmt: skip
+    assert sequence.coarse_scenes(_tube(0.05, sequence=[0.04])) == []
