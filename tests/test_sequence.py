@@ -144,8 +144,8 @@ def test_a_state_that_does_not_settle_is_dressed_directly(monkeypatch):
     res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
     assert res.completed and res.checks_passed
     rep = res.report
-    assert rep.settling_failed and rep.levels[0]["completed"]
-    assert res.summary["dressing"]["sequence_settling_failed"] == rep.settling_failed
+    assert rep.sequence_failed and rep.levels[0]["completed"]
+    assert res.summary["dressing"]["sequence_failed"] == rep.sequence_failed
     assert any(st.stage == "dress" for st in rep.steps)  # the body grew again on this mesh
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
 
@@ -164,7 +164,7 @@ def test_a_coarse_level_that_does_not_dress_is_left_out(monkeypatch):
     res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
     assert res.completed and res.checks_passed
     rep = res.report
-    assert not rep.levels[0]["completed"] and "did not dress" in rep.settling_failed
+    assert not rep.levels[0]["completed"] and "did not dress" in rep.sequence_failed
     assert any(st.stage == "dress" for st in rep.steps)
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
 
@@ -175,7 +175,7 @@ def test_levels_that_are_not_one_surface_are_refused(monkeypatch):
     scene's mesh is then dressed from the start and the report says why."""
     monkeypatch.setattr(sequence, "PADDING", 1e-9)
     res = run(_tube(0.02, sequence=[0.04]), _shared_tmp(MPI.COMM_WORLD), quiet=True)
-    assert res.completed and "could not be carried over" in res.report.settling_failed
+    assert res.completed and "could not be carried over" in res.report.sequence_failed
     assert any(st.stage == "dress" for st in res.report.steps)
     assert _mid_pressure(res) == pytest.approx(_laplace(res), rel=0.005)
 

@@ -101,8 +101,9 @@ class DressReport:
     completed: bool = False
     #: the coarser garment levels this dressing started from (``scene.sequence``), coarsest first
     levels: list[dict] = field(default_factory=list)
-    #: why the settling of the carried state failed, when it did (the dressing then ran directly)
-    settling_failed: str = ""
+    #: why the mesh sequence was not used, when it was not (a coarser level did not dress, the
+    #: levels did not fit, or the carried state did not settle): the dressing then ran directly
+    sequence_failed: str = ""
 
     @property
     def newton_iterations(self) -> int:
@@ -141,7 +142,7 @@ class DressReport:
             "all_newton_iterations": self.all_newton_iterations,
             "completed": self.completed,
             "sequence": self.levels,
-            "sequence_settling_failed": self.settling_failed,
+            "sequence_failed": self.sequence_failed,
         }
 
 

@@ -421,7 +421,7 @@ def _run_in(
                          checkpoints=checkpoints, start=start)  # fmt: skip
     if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
         solved.report.levels = levels
-        solved.report.settling_failed = levels[-1]["message"]
+        solved.report.sequence_failed = levels[-1]["message"]
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
@@ -518,7 +518,7 @@ def solve_stage(
             report, completed, message = _dress(built, solver, frames,
                                                 ckpt if checkpoints else None, None, first_step,
                                                 say)  # fmt: skip
-            report.levels, report.settling_failed = levels, why
+            report.levels, report.sequence_failed = levels, why
     except output.OutputError:
         frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
         raise
