@@ -177,7 +177,9 @@ def _nodal_field(state, values: np.ndarray, shape: tuple[int, ...]) -> dolfinx.f
 
 def carry_over(coarse, fine) -> None:
     """Put the dressed state of ``coarse`` (a :class:`~fenics_garment.scene.build.Built`) into
-    ``fine`` (the same scene on a finer garment mesh; module doc). Both states are refreshed."""
+    ``fine`` (the same scene on a finer garment mesh; module doc). Both contact states are
+    refreshed at their displacement first (the fine one's gap, normal and u_k are then those of
+    the carried state)."""
     cs, fs = coarse.contact.state, fine.contact.state
     q = fine.model.q
     transfer = _Coarse(coarse.model.geometry.mesh)
@@ -198,7 +200,6 @@ def carry_over(coarse, fine) -> None:
     fs.set_local_values(fs.lam, carried(cs.local_values(cs.lam), scalar))
     slip = cs.local_values(cs.u_k) - cs.local_values(cs.u_old)  # the elastic slip e
     fs.set_local_values(fs.u_old, fs.local_values(fs.u_k) - carried(slip, vector))
-    fs.refresh()
     fine.regularisation.place(q)
 
 
