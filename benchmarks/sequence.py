@@ -8,7 +8,7 @@ region's sensor p95 against the direct run (the path's part of the error) and ag
 level of the convergence study (record ``convergence.json``, ``<scene>:body-0.015``, 4.4 mm for
 the gilets): the speed claim is a time ratio measured in one run, beside the error of both.
 
-    python -m benchmarks.sequence [cotton_gilet|nylon_gilet|cotton_dress ...]
+    python -m benchmarks.sequence [cotton_gilet|nylon_gilet ...]
     python -m benchmarks.sequence table        (the stored record as Markdown)
 
 Writes ``benchmarks/results/sequence.json`` (section "sequence" of REPORT.md).
@@ -23,7 +23,7 @@ from benchmarks import check_args, convergence
 from benchmarks import scenes as scene_bench
 
 RESULTS = convergence.RESULTS / "sequence.json"
-KEY_REGIONS = ("waist", "upper_chest", "bust", "underbust", "upper_back")
+KEY_REGIONS = convergence.KEY_REGIONS
 #: The coarser levels each scene is sequenced through: the study's levels (35 mm / √2ᵏ for the
 #: gilets), coarse enough to cost little, fine enough that the carried state settles.
 SEQUENCES: dict[str, list[float]] = {

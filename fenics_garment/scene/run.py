@@ -557,14 +557,14 @@ def sequence_stage(
     Returns where ``built``'s dressing starts — None: no sequence, or a coarser level did not
     dress (then ``built`` is dressed from the start, and the run says so) — and the coarser
     levels' records."""
-    scene = built.scene
-    if not sequence.coarse_scenes(scene):
+    coarse = sequence.coarse_scenes(built.scene)
+    if not coarse:
         return None, []
     comm = built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     levels: list[dict] = []
     previous = None
-    for level_scene in sequence.coarse_scenes(scene):
+    for level_scene in coarse:
         h = level_scene.garment.mesh_size
         t1 = time.perf_counter()
         level = build_stage(level_scene, comm, say, body=built.body)
@@ -578,7 +578,7 @@ def sequence_stage(
         kappa0 = float(level.contact.kappa.value)
         say(f"  level {h * 1e3:.1f} mm of the mesh sequence ({level.dofs} dofs):")
         report, completed, message = _dress(
-            level, solver, _Frames(level, Path("."), False), None, start,
+            level, solver, None, None, start,
             first_step if previous is None else None, say,
         )  # fmt: skip
         levels.append({"mesh_size_m": h, "dofs": level.dofs, "completed": completed,
@@ -637,7 +637,7 @@ def write_stage(
 def _dress(
     built: scene_build.Built,
     solver: NonlinearSolver,
-    frames: _Frames,
+    frames: _Frames | None,
     ckpt: checkpoint.Writer | None,
     progress: Progress | None,
     first_step: float | None,
@@ -650,7 +650,8 @@ def _dress(
     al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
 
     def on_step(rec: DressStep) -> None:
-        frames.write()
+        if frames is not None:  # (None: a coarser level of a mesh sequence)
+            frames.write()
         cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
         what = (f"shrink {rec.shrink * 1e3:6.2f} mm" if rec.stage == "dress"
                 else f"spring c {rec.regularisation:8.2g} Pa/m")  # fmt: skip
