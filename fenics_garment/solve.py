@@ -7,6 +7,10 @@
   contact's Hessian, needed by the Jacobian only: it is skipped at the residual evaluations that
   no Jacobian follows — line-search trials, the converged iterate),
 * dead point loads added to the residual vector, scaled by the load factor λ,
+* a stop on a *cycling* Newton iteration (:func:`newton_cycle`: the residual norms repeat with
+  a period of 1–4 iterations), with :data:`CYCLING_REASON`, so the caller's retry (another line
+  search, a stiffer spring, a smaller step) starts at once instead of after ``max_it``
+  iterations; ``timings.cycles`` counts them,
 * a NaN/Inf check on every residual: PETSc's own norm check then ends the Newton solve with
   ``DIVERGED_FUNCTION_NANORINF`` (petsc4py 3.25 has no ``setFunctionDomainError``), so the load
   stepper or the dressing cuts the step instead of propagating NaNs; ``timings.nonfinite``
@@ -110,6 +114,31 @@ _REASONS = {
 }
 #: SNES reason of a solve stopped by a NaN/Inf residual.
 NONFINITE_REASON = int(PETSc.SNES.ConvergedReason.DIVERGED_FUNCTION_NANORINF)
+#: SNES reason of a solve stopped because Newton cycles (not a PETSc code: PETSc's are > -20).
+CYCLING_REASON = -100
+_REASONS[CYCLING_REASON] = "diverged cycling"
+#: Periods looked for by :func:`newton_cycle` and the relative agreement that counts as a repeat.
+#: The dress at 22.5 mm (full Newton steps, the multipliers' last pass to the answer's
+#: tolerance): 0.0025, 0.0034, then 0.00031 / 0.0033 N alternating until ``max_it`` (30): 28
+#: iterations that changed nothing before the retry with the "l2" line search converged.
+CYCLE_PERIODS, CYCLE_RTOL = (1, 2, 3, 4), 1e-3
+
+
+def newton_cycle(residuals) -> int:
+    """The period p of a cycle the residual norms r₀ … r_n have entered, 0 if none: every r_k
+    of the last 2p iterations equals r_{k−p} to :data:`CYCLE_RTOL` (the same iterates come back:
+    two full periods repeated, so 3p + 1 norms at least). A converging or merely slow Newton
+    iteration (a damped line search's plateaus shrink the residual by ≥ 1 % per iteration)
+    never repeats itself that closely."""
+    r = np.asarray(residuals, dtype=float)
+    n = len(r) - 1
+    for p in CYCLE_PERIODS:
+        if n < 3 * p:
+            break
+        a, b = r[n - 2 * p + 1 :], r[n - 3 * p + 1 : n - p + 1]
+        if np.all(np.abs(a - b) <= CYCLE_RTOL * np.maximum(np.abs(a), np.abs(b))):
+            return p
+    return 0
 
 
 def reason_name(reason: int) -> str:
@@ -142,6 +171,7 @@ class Timings:
     steps: int = 0
     cuts: int = 0
     nonfinite: int = 0  # residual evaluations that gave NaN/Inf (each ends its Newton solve)
+    cycles: int = 0  # Newton solves stopped because they cycled (CYCLING_REASON)
 
     def as_dict(self) -> dict:
         return dict(self.__dict__)
@@ -188,6 +218,7 @@ class NonlinearSolver:
         self.hooks = list(pre_residual or [])
         self.jacobian_hooks = list(pre_jacobian or [])
         self.timings = Timings()
+        self._cycled = False  # set by the monitor of a solve that cycles
         opts = dict(DEFAULT_SNES_OPTIONS)
         if symmetric is None:
             symmetric = is_symmetric(model) and not self.hooks
@@ -385,15 +416,31 @@ class NonlinearSolver:
         snes.setFunction(residual, p.b)
         snes.setJacobian(jacobian, p.A, p.P_mat)
 
+        norms: list[float] = []
+
+        def stop_cycling(snes_, its, fnorm):
+            if its == 0:
+                norms.clear()
+            norms.append(float(fnorm))
+            if snes_.getConvergedReason() == 0 and newton_cycle(norms):
+                this()._cycled = True
+                snes_.setConvergedReason(PETSc.SNES.ConvergedReason.DIVERGED_LOCAL_MIN)
+
+        snes.setMonitor(stop_cycling)
+
     # -- solve -------------------------------------------------------------------------------
     def solve(self) -> tuple[int, int]:
         """One Newton solve from the current ``model.q``; returns (iterations, reason)."""
         snes = self.problem.solver
         snes.setConvergenceHistory(length=snes.getTolerances()[3] + 1, reset=True)
+        self._cycled = False
         t0 = time.perf_counter()
         self.problem.solve()
         dt = time.perf_counter() - t0
         its, reason = snes.getIterationNumber(), snes.getConvergedReason()
+        if self._cycled:
+            reason = CYCLING_REASON
+            self.timings.cycles += 1
         self.timings.newton_iterations += its
         self.timings.linear_iterations += snes.getLinearSolveIterations()
         self.timings.solve += dt
