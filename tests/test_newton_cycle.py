@@ -17,6 +17,14 @@ def test_a_two_cycle_is_found_after_two_repeated_periods():
     assert not any(found[:7])
 
 
+def test_a_cycle_of_ten_is_found_after_one_repeated_period():
+    # the dress at 25.8 mm, the same pass: the same ten norms from k = 0, 10, 20
+    period = [0.00058, 0.043, 0.0099, 0.068, 0.0019, 0.025, 0.035, 0.027, 0.063, 0.025]
+    r = period * 3 + period[:1]
+    found = [newton_cycle(r[: n + 1]) for n in range(len(r))]
+    assert found.index(10) == 19 and not any(found[:19])
+
+
 def test_converging_and_slow_iterations_are_not_cycles():
     quadratic = [0.0039, 0.12, 0.055, 0.022, 0.0096, 0.0034, 0.00029, 3.1e-6, 2.1e-9]
     non_monotone = [0.0021, 1.1, 0.54, 0.11, 0.15, 0.014, 0.013, 0.0015, 5.4e-5, 2.9e-8]
