@@ -419,13 +419,10 @@ class NonlinearSolver:
         snes.setFunction(residual, p.b)
         snes.setJacobian(jacobian, p.A, p.P_mat)
 
-        norms: list[float] = []
-
         def stop_cycling(snes_, its, fnorm):
-            if its == 0:
-                norms.clear()
-            norms.append(float(fnorm))
-            if snes_.getConvergedReason() == 0 and newton_cycle(norms):
+            # the history (reset by solve()) already holds this iteration's norm
+            history = snes_.getConvergenceHistory()[0]
+            if snes_.getConvergedReason() == 0 and newton_cycle(history):
                 this()._cycled = True
                 snes_.setConvergedReason(PETSc.SNES.ConvergedReason.DIVERGED_LOCAL_MIN)
 
