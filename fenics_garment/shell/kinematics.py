@@ -44,6 +44,7 @@ from fenics_garment.shell.geometry import (
     nodal_director,
     tangent_projector,
 )
+from fenics_garment.shell.rest import FlatRest
 
 _SMALL = 1e-6  # |θ|² below which the Taylor branch of the exponential map is used
 
@@ -108,6 +109,9 @@ class ShellGeometry:
     orientation: dolfinx.fem.Function  # DG0, ±1
     director: dolfinx.fem.Function  # d₀, continuous, unit at the nodes
     warp: ufl.core.expr.Expr  # a vector field, projected onto each tangent plane for e₁
+    #: a flat stress-free rest state (sewing-pattern panels, :mod:`.rest`), or None: the mesh
+    #: itself is stress free
+    rest: FlatRest | None = None
 
     @classmethod
     def from_mesh(
@@ -117,9 +121,14 @@ class ShellGeometry:
         warp=(1.0, 0.0, 0.0),
         outward=None,
         director_degree: int = 2,
+        rest: dolfinx.fem.Function | None = None,
     ) -> ShellGeometry:
         """Orient the cells, average the director, and set the warp direction (three numbers:
-        a ``fem.Constant``; or a ``fem.Function``/UFL vector field, used as given)."""
+        a ``fem.Constant``; or a ``fem.Function``/UFL vector field, used as given).
+
+        ``rest``: a flat map (:mod:`.rest`) makes the flat panels the stress-free state; the
+        warp then comes from the panels' grain lines and ``warp`` is not used by the strains.
+        """
         if mesh.topology.dim != 2 or mesh.geometry.dim != 3:
             raise ValueError(
                 f"a shell needs a surface mesh in 3D (tdim 2, gdim 3); got tdim "
@@ -128,7 +137,8 @@ class ShellGeometry:
         s = cell_orientation(mesh, outward)
         d0 = nodal_director(mesh, s, director_degree)
         w = warp if isinstance(warp, ufl.core.expr.Expr) else warp_constant(mesh, warp)
-        return cls(mesh=mesh, orientation=s, director=d0, warp=w)
+        flat = None if rest is None else FlatRest(rest)
+        return cls(mesh=mesh, orientation=s, director=d0, warp=w, rest=flat)
 
     def set_warp(self, direction) -> None:
         """Change a uniform warp direction in place: the next assembly uses it, no recompile.
@@ -155,7 +165,16 @@ class ShellGeometry:
         return d / ufl.sqrt(ufl.dot(d, d))
 
     def frame(self) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr]:
+        """(e₁, e₂): warp and weft of the stress-free fabric, unit in its metric."""
+        if self.rest is not None:
+            return self.rest.frame(self.normal)
         return local_frame(self.normal, self.warp)
+
+    @property
+    def rest_area(self) -> ufl.core.expr.Expr | None:
+        """dA_rest / dA_mesh (the flat panels' area per mesh area), None if the mesh is the
+        rest state (ratio 1, left out of the forms)."""
+        return None if self.rest is None else self.rest.area_ratio
 
 
 @dataclass(frozen=True)
@@ -199,10 +218,12 @@ def shell_kinematics(
     Pd0 = P * ufl.grad(d0)
     eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - (1.0 if a == b else 0.0))
                           for b in range(2)] for a in range(2)])  # fmt: skip
+    # rest curvature: the mesh's own (a curved mesh is stress free), or 0 for flat panels
+    flat = geometry.rest is not None
     kap = ufl.as_matrix(
         [[0.5 * (ufl.dot(Fe[a], gde[b]) + ufl.dot(Fe[b], gde[a]))
-          - 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a])) for b in range(2)]
-         for a in range(2)]
+          - (0 if flat else 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a])))
+          for b in range(2)] for a in range(2)]
     )  # fmt: skip
     gam = ufl.as_vector([ufl.dot(Fe[a], d) - ufl.dot(e[a], d0) for a in range(2)])
     drill = 0.5 * (ufl.dot(rotate(theta, e1), Fe[1]) - ufl.dot(rotate(theta, e2), Fe[0]))

@@ -204,8 +204,10 @@ class ShellModel:
         C = self.C
         # Drilling is an in-plane constraint like the membrane strain: integrated like it. Under
         # reduced integration alone the cubic bubble of θ·n would be a zero-energy mode.
-        psi_ms = self.membrane(kin, C) + self.shear(kin, C) + self.drilling(kin, C)
-        Pi = self.bending(kin, C) * self.dx_full
+        psi_ms = self.per_rest_area(
+            self.membrane(kin, C) + self.shear(kin, C) + self.drilling(kin, C)
+        )
+        Pi = self.per_rest_area(self.bending(kin, C)) * self.dx_full
         if self.variant.psri:
             alpha = self.psri_weight
             Pi += alpha * psi_ms * self.dx_full + (1 - alpha) * psi_ms * self.dx_reduced
@@ -215,6 +217,12 @@ class ShellModel:
             psi = density if isinstance(density, ufl.core.expr.Expr) else density(kin, C)
             Pi += psi * measure
         return Pi
+
+    def per_rest_area(self, density: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+        """A density per unit rest area as one per unit mesh area (× dA_rest/dA_mesh when the
+        rest state is flat panels, :mod:`.rest`; unchanged when the mesh is the rest state)."""
+        j = self.geometry.rest_area
+        return density if j is None else density * j
 
     @property
     def added_energies(self) -> tuple:
@@ -244,7 +252,7 @@ class ShellModel:
     def add_gravity(self, g=(0.0, 0.0, -9.80665)) -> dolfinx.fem.Constant:
         """Self weight ρh g (g in m/s², default: standard gravity along −z)."""
         c = self.constant(g)
-        self.add_work(terms.gravity_work(self.u, self.C, c))
+        self.add_work(self.per_rest_area(terms.gravity_work(self.u, self.C, c)))
         return c
 
     def constant(self, value) -> dolfinx.fem.Constant:
@@ -257,7 +265,7 @@ class ShellModel:
     def add_distributed_load(self, f) -> dolfinx.fem.Constant:
         """A dead load per unit reference area, f (N/m²) as a vector; returns its Constant."""
         c = self.constant(f)
-        self.add_work(terms.distributed_load_work(self.u, c))
+        self.add_work(self.per_rest_area(terms.distributed_load_work(self.u, c)))
         return c
 
     def add_edge_load(self, t, ds: ufl.Measure) -> dolfinx.fem.Constant:
@@ -376,7 +384,7 @@ class ShellModel:
         if self._follower:
             kin = self.kinematics()
             for p in self._follower:
-                term = -terms.pressure_residual(kin, p, v_u) * self.dx_full
+                term = -self.per_rest_area(terms.pressure_residual(kin, p, v_u)) * self.dx_full
                 f = term if f is None else f + term
         points = self._point_forces(v_u)
         if points is not None:
@@ -400,6 +408,28 @@ class ShellModel:
         out = dolfinx.fem.Function(V, name="displacement")
         out.interpolate(u)
         return out
+
+    def rest_free_floor(self) -> float | None:
+        """The round-off floor of the internal forces when the rest state is not the mesh.
+
+        At q = 0 a shell whose rest state is its mesh has only round-off internal forces (the
+        solver measures that floor directly); one whose rest state is flat panels carries its
+        real sewing forces there. Its floor is that of the same shell and mesh with the mesh as
+        rest state: ‖δΠ_int(q = 0)‖ of such a twin (one more residual form to compile). None
+        when the mesh is the rest state.
+        """
+        if self.geometry.rest is None:
+            return None
+        from dataclasses import replace as _replace
+
+        twin = ShellModel(_replace(self.geometry, rest=None), self.material, self.element,
+                          self.drilling_factor)  # fmt: skip
+        F = ufl.derivative(twin.internal_energy(), twin.q, ufl.TestFunction(twin.Q))
+        b = dolfinx.fem.assemble_vector(dolfinx.fem.form(F))
+        b.scatter_reverse(dolfinx.la.InsertMode.add)
+        n = twin.Q.dofmap.index_map.size_local * twin.Q.dofmap.index_map_bs
+        comm = self.geometry.mesh.comm
+        return float(np.sqrt(comm.allreduce(float(np.sum(b.array[:n] ** 2)))))
 
     def energy_value(self, form: ufl.Form) -> float:
         comm = self.geometry.mesh.comm

@@ -40,6 +40,7 @@ from fenics_garment.shell import bcs as shell_bcs
 from fenics_garment.shell.geometry import parametric_surface_mesh
 from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ShellModel
+from fenics_garment.shell.rest import flat_map_from_function
 from fenics_garment.solve import NonlinearSolver
 
 #: Synthetic, strongly orthotropic test fabric: warp 4× stiffer than weft (not a reference value).
@@ -113,9 +114,22 @@ def _distort_tube_mesh(mesh, r0: float, L: float, n: tuple[int, int], amount: fl
 
 
 def tube_pressure(
-    R_c: float, r0: float, s, *, warp: str = "axial", bending: bool = True, stuck: bool = False
+    R_c: float,
+    r0: float,
+    s,
+    *,
+    warp: str = "axial",
+    bending: bool = True,
+    stuck: bool = False,
+    flat: bool = False,
 ):
     """Exact free-end pressure of a tight shell tube [Pa] (module docstring).
+
+    ``flat``: the tube is a flat rectangle of width 2πr0 sewn into a tube (rest curvature 0),
+    not a stress-free cylinder. The membrane part is the same; the bending strain is
+    κ = F a_θ·∇d a_θ = λ²/R_c = λ/r0 instead of (λ − 1)/r0, so with the energy
+    π r0 D (λ/r0)² per unit length, p_b = dΠ/dR_c / (2π R_c) = D λ/(r0² R_c) (÷ λ_z per
+    deformed area, as for the stress-free cylinder).
 
     ``s`` is the :class:`ShellStiffness`; with the warp along the axis the hoop is direction 2.
     ``stuck``: the tube held axially by friction from the moment it touches (a tube dressed
@@ -133,7 +147,7 @@ def tube_pressure(
     S = a_tt * e + a_tz * e_zz
     p = (lam / lz) * S / R_c
     if bending:
-        p += d_tt * (lam - 1) / (r0**2 * R_c) / lz
+        p += d_tt * (lam if flat else lam - 1) / (r0**2 * R_c) / lz
     return float(p)
 
 
@@ -175,8 +189,14 @@ def tight_tube(
     distortion: float = 0.0,
     options: dict | None = None,
     surface: type[SearchSurface] = SearchSurface,
+    rest: str = "mesh",
 ) -> ContactCase:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
+
+    ``rest="flat"``: the tube's stress-free state is the flat rectangle (2πr0 × L, warp along
+    the axis or around it as ``warp`` says) rather than the cylinder it is placed on
+    (:mod:`fenics_garment.shell.rest`); the reference is then :func:`tube_pressure` with
+    ``flat=True``.
 
     ``n`` = (cells around the quarter circle, cells along the half length); the body cylinder
     (z ∈ [−L, L]) has ``n_body`` facets around and ``n_body_z`` along. ``distortion`` moves the
@@ -190,9 +210,21 @@ def tight_tube(
     )  # fmt: skip
     if distortion:
         _distort_tube_mesh(mesh, r0, L, n, distortion)
+    if rest not in ("mesh", "flat"):
+        raise ValueError(f"rest must be 'mesh' or 'flat', got {rest!r}")
+    flat = rest == "flat"
+    Y = None
+    if flat:  # the rectangle's coordinates, grain (x) along the warp
+
+        def unrolled(x):
+            s_hoop = r0 * np.arctan2(x[1], x[0])
+            return np.vstack([x[2], s_hoop] if warp == "axial" else [s_hoop, x[2]])
+
+        Y = flat_map_from_function(mesh, unrolled)
     geo = ShellGeometry.from_mesh(
-        mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0])
-    )
+        mesh, warp=_warp_function(mesh, warp), outward=lambda x: x * np.array([1.0, 1.0, 0.0]),
+        rest=Y,
+    )  # fmt: skip
     model = ShellModel(geo, material, element=element)
     body = surface(*cylinder(R, -L, L, n_body, n_body_z))
     contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
@@ -204,7 +236,7 @@ def tight_tube(
     solver = _solver(model, bcs, contact, options)
     s = model.stiffness
     R_c = R + s.thickness / 2
-    ref = tube_pressure(R_c, r0, s, warp=warp)
+    ref = tube_pressure(R_c, r0, s, warp=warp, flat=flat)
     return ContactCase(model, contact, solver, bcs, ref, R, r0,
                  {"L": L, "warp": warp, "membrane_only": tube_pressure(R_c, r0, s, warp=warp,
                                                                        bending=False)})  # fmt: skip
