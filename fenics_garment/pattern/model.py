@@ -176,6 +176,11 @@ class Polyline(_Curve):
     def end(self) -> Array:  # type: ignore[override]
         return self.points[-1]
 
+    @property
+    def length(self) -> float:
+        """Exact: the sum of the pieces (the sampled table would cut the corners)."""
+        return float(np.linalg.norm(np.diff(self.points, axis=0), axis=1).sum())
+
     def point(self, t) -> Array:
         t = np.atleast_1d(np.asarray(t, dtype=float))
         p = self.points
