@@ -15,6 +15,19 @@ the *constraint* g(q, λ) = 0, that picks the next point of the curve:
   of the load point), and λ is the load that holds it there. It passes limit points in λ but not
   in w: a snap-back of the controlled dof is jumped (to another branch at the same w).
 
+**Stopping exactly at a target.** ``ArcLength.run(..., stop_at_load=λ*)`` ends exactly at λ = λ*
+the first time the path reaches it (rising or, after a limit point, falling), and
+``stop_at=(probe, w*)`` where a displacement component (a :class:`DofProbe`, e.g. u_z at a
+node) equals w*: the increment that crosses the target is *cut back* onto it — regula falsi
+(Illinois) on its arc length from the last point before the crossing, each trial a converged
+increment — and the state is then *pinned* on the target by a bordered Newton solve with the
+constraint λ = λ* (resp. e·q = w*), so that the last point is at the target to round-off
+(within 1e-10 × max(1, |target|) even where the pin cannot converge, e.g. at a limit point,
+or SolveFailed). ``reverse=True`` follows the path backwards from the current state (the
+direction opposite to the last increment, or decreasing λ on a fresh path): how to come back
+to a λ* that the path has passed. :class:`~fenics_garment.solve.LoadStepper` only raises λ and
+refuses a target below the current λ, naming this call.
+
 Both are solved by the *bordering* method: each Newton iteration factorises K once and solves it
 twice, K δq_R = −F (the load-controlled Newton correction) and K δq_T = f (the tangent
 displacement of the load direction f = −∂F/∂λ), then sets δq = δq_R + δλ δq_T with δλ chosen so
@@ -60,6 +73,7 @@ class PathPoint:
     iterations: int  # Newton (corrector) iterations of the increment
     step: float  # arc length Δs (or prescribed-displacement increment) of the increment
     cuts: int  # step halvings before it converged
+    landed: bool = False  # the point was cut back onto a target (stop_at_load / stop_at)
 
 
 # -- tangent load f = −∂F/∂λ -------------------------------------------------------------------
@@ -198,6 +212,7 @@ class _Stats:
     newton_iterations: int = 0
     factorisations: int = 0
     wall: float = 0.0
+    landing_solves: int = 0  # trial increments and pins that cut a crossing back onto a target
 
 
 class _PathFollower:
@@ -239,6 +254,7 @@ class _PathFollower:
         self.ksp.setOperators(p.A, p.P_mat if p.P_mat is not None else p.A)
         self.lam = float(self.model.load_factor.value)
         self.Dlam_prev = 0.0
+        self._x_start = p.b.duplicate()  # the point before an increment that crossed a target
 
     # -- PETSc plumbing
     def _sync_in(self) -> None:
@@ -336,6 +352,7 @@ class _PathFollower:
         max_step: float,
         stop: Callable[[PathPoint], bool] | None,
         lambda_max: float | None,
+        target: _Target | None = None,
     ) -> list[PathPoint]:
         t0 = time.perf_counter()
         self._sync_in()
@@ -344,7 +361,14 @@ class _PathFollower:
         cuts = done = 0
         try:
             while done < max_steps:
+                f_n, lam_n = (target.gap(self) if target else 0.0), self.lam
                 its = self._increment(step, tol)
+                landed = False
+                if its is not None and target is not None:
+                    f_c = target.gap(self)
+                    if f_c == 0.0 or (f_n != 0.0 and (f_c > 0.0) != (f_n > 0.0)):
+                        its = self._land(target, self._step, tol, lam_n, f_n, f_c)
+                        landed = True
                 if its is None:
                     cuts += 1
                     self.stats.cuts += 1
@@ -357,14 +381,14 @@ class _PathFollower:
                             f"{cuts} times)",
                         )  # fmt: skip
                     continue
-                point = PathPoint(self.lam, self._value(), its, self._step, cuts)
+                point = PathPoint(self.lam, self._value(), its, self._step, cuts, landed)
                 self.history.append(point)
                 self.stats.increments += 1
                 done += 1
                 if self.on_step:
                     self.on_step(point)
                 cuts = 0
-                if stop is not None and stop(point):
+                if landed or (stop is not None and stop(point)):
                     break
                 if lambda_max is not None and self.lam >= lambda_max:
                     break
@@ -374,6 +398,130 @@ class _PathFollower:
             self.model.load_factor.value = self.lam
             self.stats.wall += time.perf_counter() - t0
         return self.history
+
+    # -- landing on a target (stop_at_load, stop_at)
+    def _land(
+        self, target: _Target, step: float, tol: float, lam_n: float, f_n: float, f_c: float
+    ) -> int:
+        """The increment of arc ``step`` from (x_n, λ_n) crossed ``target`` (gap f_n before, f_c
+        after, opposite signs): cut it back onto the target. Returns the Newton iterations;
+        the state is on the target (pinned), or within ``target.tol`` of it, else SolveFailed."""
+        self.x_n.copy(self._x_start)
+        its_total = 0
+        s_lo, g_lo, s_hi, g_hi = 0.0, f_n, step, f_c
+        f, side = f_c, 0
+        pin_at = math.inf  # |gap| of the last failed pin: retried only 100× closer
+        for _ in range(self.MAX_LANDING):
+            if f == 0.0:
+                return max(its_total, 1)
+            if abs(f) < 1e-2 * pin_at:
+                its = self._pin(target, tol)
+                self.stats.landing_solves += 1
+                if its is not None:
+                    return max(its_total + its, 1)
+                pin_at = abs(f)
+            if abs(f) <= target.tol:  # e.g. at a limit point, where no pin converges
+                return max(its_total, 1)
+            # Illinois: regula falsi whose retained end has its gap halved when kept twice
+            s = s_hi - g_hi * (s_hi - s_lo) / (g_hi - g_lo)
+            if not (min(s_lo, s_hi) < s < max(s_lo, s_hi)):
+                s = 0.5 * (s_lo + s_hi)
+            self._x_start.copy(self.x)
+            self._sync_out(self.x)
+            self.lam = lam_n
+            its = self._increment(s, tol)
+            self.stats.landing_solves += 1
+            if its is None:  # a shorter arc than one that converged: not expected
+                raise SolveFailed(
+                    self.lam, its_total, 0,
+                    f"path following crossed {target.name} = {target.value:.10g} but an "
+                    f"increment of arc {s:.3g} back towards it failed (state left at the point "
+                    f"before the crossing, λ = {self.lam:.10g})",
+                )  # fmt: skip
+            its_total += its
+            f = target.gap(self)
+            if (f > 0.0) == (g_hi > 0.0):
+                s_hi, g_hi = s, f
+                if side == 1:
+                    g_lo *= 0.5
+                side = 1
+            else:
+                s_lo, g_lo = s, f
+                if side == -1:
+                    g_hi *= 0.5
+                side = -1
+        raise SolveFailed(
+            self.lam, its_total, 0,
+            f"path following could not land on {target.name} = {target.value:.10g}: "
+            f"{target.name} = {target.value + f:.10g} after {self.MAX_LANDING} trials",
+        )  # fmt: skip
+
+    def _pin(self, target: _Target, tol: float) -> int | None:
+        """Bordered Newton from the current state with the target as the constraint (λ = λ*, or
+        e·q = w*); iterations, or None with the state restored."""
+        x = self.x
+        x.copy(self.x_n)
+        lam0 = self.lam
+        lam = target.value if target.kind == "load" else self.lam
+        for it in range(self.PIN_MAX_IT + 1):
+            rnorm = self._residual(lam)
+            if not np.isfinite(rnorm):
+                break
+            on_target = target.kind == "load" or abs(target.gap_of(self, x)) <= 1e-14 * max(
+                1.0, abs(target.value))  # fmt: skip
+            if it >= 1 and rnorm <= tol and on_target:  # one correction at least: to round-off
+                self.lam = lam
+                self.stats.newton_iterations += it
+                return max(it, 1)
+            if it == self.PIN_MAX_IT or not self._factorise_and_tangent():
+                break
+            self.ksp.solve(self.r, self.dq_r)
+            self.dq_r.scale(-1.0)
+            dlam = 0.0
+            if target.kind == "value":
+                et = target.probe.of(self.dq_t)
+                if et == 0.0:
+                    break
+                dlam = (target.value - target.probe.of(x) - target.probe.of(self.dq_r)) / et
+                self.dq_r.axpy(dlam, self.dq_t)
+            x.axpy(1.0, self.dq_r)
+            lam += dlam
+            self._sync_out(x)
+        self.stats.newton_iterations += self.PIN_MAX_IT
+        self.x_n.copy(x)
+        self._sync_out(x)
+        self.lam = lam0
+        self.model.load_factor.value = lam0
+        return None
+
+    #: regula falsi trials (and pins) to land on a target; Newton iterations of a pin
+    MAX_LANDING = 40
+    PIN_MAX_IT = 8
+
+
+@dataclass
+class _Target:
+    """Where path following must stop exactly: λ = value ("load") or probe = value ("value")."""
+
+    kind: str
+    value: float
+    probe: DofProbe | None = None
+
+    @property
+    def name(self) -> str:
+        return "λ" if self.kind == "load" else "the probed dof"
+
+    @property
+    def tol(self) -> float:
+        return 1e-10 * max(1.0, abs(self.value))
+
+    def gap(self, follower: _PathFollower) -> float:
+        return self.gap_of(follower, follower.x)
+
+    def gap_of(self, follower: _PathFollower, x: PETSc.Vec) -> float:
+        if self.kind == "load":
+            return follower.lam - self.value
+        return self.probe.of(x) - self.value
 
 
 class ArcLength(_PathFollower):
@@ -406,6 +554,7 @@ class ArcLength(_PathFollower):
                 raise ValueError(f"weights must be 'displacement', 'all' or a Vec, got {weights!r}")
         self.w = weights
         self.psi2 = psi * psi
+        self._fresh_sign = 1.0
         self._wv = solver.problem.b.duplicate()
         self._a = solver.problem.b.duplicate()
 
@@ -421,6 +570,8 @@ class ArcLength(_PathFollower):
         if self.history:
             sign = self._wdot(self.Dq_prev, self.dq_t) + self.psi2 * self.Dlam_prev
             dlam = math.copysign(dlam, sign) if sign != 0 else dlam
+        else:  # a fresh path: up in λ, or down with run(..., reverse=True)
+            dlam *= self._fresh_sign
         return dlam
 
     def _correct(self, step: float, Dlam: float) -> float | None:
@@ -459,15 +610,41 @@ class ArcLength(_PathFollower):
         min_step_ratio: float = 1e-4,
         stop: Callable[[PathPoint], bool] | None = None,
         lambda_max: float | None = None,
+        stop_at_load: float | None = None,
+        stop_at: tuple[DofProbe, float] | None = None,
+        reverse: bool = False,
     ) -> list[PathPoint]:
         """Follow the path from the current state; stop after ``max_steps`` increments, when
-        ``stop(point)`` is true or when λ ≥ ``lambda_max``. The arc length of the first increment
-        is that of a tangent step Δλ₀ = ``initial_load_step``; later ones adapt within
-        [``min_step_ratio``, ``max_step_ratio``] × that."""
+        ``stop(point)`` is true or when λ ≥ ``lambda_max`` (at the first point beyond it).
+
+        ``stop_at_load = λ*``: stop *exactly* at λ = λ* the first time the path reaches it
+        from the current state, rising or falling (the last point has ``landed = True`` and
+        λ = λ* to round-off; module doc). ``stop_at = (probe, w*)``: likewise where the dof of
+        the :class:`DofProbe` equals w* (e.g. ``DofProbe.at_point(model, p, 2)``: u_z at p).
+        ``reverse``: go back along the path (opposite to the last increment; on a fresh path,
+        towards decreasing λ), e.g. to come back to a λ* the path has passed.
+
+        The arc length of the first increment is that of a tangent step Δλ₀ =
+        ``|initial_load_step|``; later ones adapt within [``min_step_ratio``,
+        ``max_step_ratio``] × that."""
+        if stop_at_load is not None and stop_at is not None:
+            raise ValueError("give stop_at_load or stop_at, not both")
+        target = None
+        if stop_at_load is not None:
+            target = _Target("load", float(stop_at_load))
+        elif stop_at is not None:
+            probe, value = stop_at
+            if not isinstance(probe, DofProbe):
+                raise TypeError(f"stop_at needs (DofProbe, value), got {type(probe).__name__}")
+            target = _Target("value", float(value), probe)
         ds = self.ds0 = self.arc_for_load_step(initial_load_step)
+        if reverse:
+            self.Dq_prev.scale(-1.0)
+            self.Dlam_prev = -self.Dlam_prev
+        self._fresh_sign = -1.0 if reverse else 1.0
         return self._run(
             ds, max_steps=max_steps, min_step=min_step_ratio * ds, max_step=max_step_ratio * ds,
-            stop=stop, lambda_max=lambda_max,
+            stop=stop, lambda_max=lambda_max, target=target,
         )  # fmt: skip
 
 

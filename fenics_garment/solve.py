@@ -15,6 +15,9 @@
   ``DIVERGED_FUNCTION_NANORINF`` (petsc4py 3.25 has no ``setFunctionDomainError``), so the load
   stepper or the dressing cuts the step instead of propagating NaNs; ``timings.nonfinite``
   counts them,
+* a *progress* callback (``progress(its, fnorm, seconds)``, after every Newton iteration, with
+  the wall time of that iteration): a large problem reports each iteration instead of going
+  silent for minutes (``scene.run`` prints those that take long),
 * the options checked against what this design supports (:mod:`fenics_garment.petsc_options`)
   before PETSc sees them,
 * an iterative solver on request (``pc_type = "gamg"``, :data:`ITERATIVE_OPTIONS`): the shell's
@@ -222,6 +225,9 @@ class NonlinearSolver:
         self.jacobian_hooks = list(pre_jacobian or [])
         self.timings = Timings()
         self._cycled = False  # set by the monitor of a solve that cycles
+        #: called after every Newton iteration as progress(its, ‖F‖, seconds of the iteration)
+        self.progress: Callable[[int, float, float], None] | None = None
+        self._t_iteration = time.perf_counter()
         opts = dict(DEFAULT_SNES_OPTIONS)
         if symmetric is None:
             symmetric = is_symmetric(model) and not self.hooks
@@ -429,11 +435,16 @@ class NonlinearSolver:
         snes.setJacobian(jacobian, p.A, p.P_mat)
 
         def stop_cycling(snes_, its, fnorm):
+            solver = this()
             # the history (reset by solve()) already holds this iteration's norm
             history = snes_.getConvergenceHistory()[0]
             if snes_.getConvergedReason() == 0 and newton_cycle(history):
-                this()._cycled = True
+                solver._cycled = True
                 snes_.setConvergedReason(PETSc.SNES.ConvergedReason.DIVERGED_LOCAL_MIN)
+            now = time.perf_counter()
+            if solver.progress is not None and its > 0:
+                solver.progress(int(its), float(fnorm), now - solver._t_iteration)
+            solver._t_iteration = now
 
         snes.setMonitor(stop_cycling)
 
@@ -443,7 +454,7 @@ class NonlinearSolver:
         snes = self.problem.solver
         snes.setConvergenceHistory(length=snes.getTolerances()[3] + 1, reset=True)
         self._cycled = False
-        t0 = time.perf_counter()
+        t0 = self._t_iteration = time.perf_counter()
         self.problem.solve()
         dt = time.perf_counter() - t0
         its, reason = snes.getIterationNumber(), snes.getConvergedReason()
@@ -620,8 +631,11 @@ class LoadStepper:
         lam = current if (self.history or from_current) else 0.0
         if from_current and lam > target + 1e-14:
             raise ValueError(
-                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; "
-                "load stepping only increases λ (use path following to go back)"
+                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; load stepping "
+                f"only increases λ: to come back to λ = {target:.6g} along the path call "
+                f"fenics_garment.path.ArcLength(solver).run(step, stop_at_load={target:.6g}, "
+                "reverse=True) (and to stop there in the first place, run(..., "
+                f"stop_at_load={target:.6g}) instead of lambda_max)"
             )
         dlam = (target - lam) / self.steps
         q_prev = q.x.array.copy()

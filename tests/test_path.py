@@ -148,6 +148,62 @@ def test_load_stepping_continues_after_path_following(truss):
         LoadStepper(solver).run(0.2, from_current=True)
 
 
+def _real_roots(coefficients) -> list[float]:
+    return sorted(x.real for x in np.roots(coefficients) if abs(x.imag) < 1e-12)
+
+
+def test_arc_length_stops_exactly_at_a_load_on_every_branch(truss):
+    """``stop_at_load = 0.2`` three times in a row: the path meets λ = 0.2 rising (before the
+    snap-through), falling (after the limit point) and rising again (the inverted truss), each
+    time exactly, at the three roots of r(u₁) = u₁³ − 3u₁² + 2u₁ = 0.2."""
+    model, solver = truss
+    u1, u2 = _probe(model, 0), _probe(model, 1)
+    path = ArcLength(solver, monitor=u2)
+    roots = _real_roots([1.0, -3.0, 2.0, -0.2])
+    assert roots[0] < 1 - 1 / math.sqrt(3) < roots[1] < 1 + 1 / math.sqrt(3) < roots[2]
+    for root in roots:
+        history = path.run(0.02, stop_at_load=0.2)
+        last = history[-1]
+        assert last.landed and last.load_factor == 0.2  # exactly, not within a tolerance
+        assert float(model.load_factor.value) == 0.2
+        assert u1() == pytest.approx(root, abs=1e-8)
+        assert u2() == pytest.approx(u2_of(root), abs=1e-8)
+    assert path.stats.cuts == 0 and path.stats.landing_solves <= 6
+
+
+def test_arc_length_stops_exactly_at_a_displacement(truss):
+    """``stop_at = (u₂, 1)``: u₂ = 1 is met three times, rising, on the snap-back (u₂ going
+    back) and rising again; u₁ + r(u₁)/k = 1 is 2u₁³ − 6u₁² + 5u₁ − 1 = 0, whose roots are
+    u₁ = 1 − 1/√2, 1, 1 + 1/√2 with the loads λ = r(u₁) = 1/(2√2), 0, −1/(2√2)."""
+    model, solver = truss
+    u1, u2 = _probe(model, 0), _probe(model, 1)
+    path = ArcLength(solver, monitor=u2)
+    a = 1 / math.sqrt(2)
+    for root, load in ((1 - a, a / 2), (1.0, 0.0), (1 + a, -a / 2)):
+        last = path.run(0.02, stop_at=(u2, 1.0))[-1]
+        assert last.landed and abs(u2() - 1.0) <= 1e-14 and last.value == u2()
+        assert u1() == pytest.approx(root, abs=1e-8)
+        assert last.load_factor == pytest.approx(load, abs=1e-8)
+
+
+def test_going_back_to_a_load_the_path_has_passed(truss):
+    """Arc length with ``lambda_max = 1`` ends beyond λ = 1; load stepping refuses to go back and
+    names the call that does, which lands exactly on λ = 1 on the same (inverted) branch."""
+    model, solver = truss
+    u1 = _probe(model, 0)
+    ArcLength(solver).run(0.02, lambda_max=1.0)
+    beyond = float(model.load_factor.value)
+    assert beyond > 1.0
+    with pytest.raises(ValueError, match=r"stop_at_load=1, reverse=True") as err:
+        LoadStepper(solver).run(1.0, from_current=True)
+    assert "\n" not in str(err.value)
+    back = ArcLength(solver)
+    last = back.run(0.02, stop_at_load=1.0, reverse=True)[-1]
+    assert last.landed and last.load_factor == 1.0
+    assert u1() == pytest.approx(_real_roots([1.0, -3.0, 2.0, -1.0])[-1], abs=1e-8)
+    assert all(p.load_factor < beyond for p in back.history)  # it went down, not up
+
+
 # Sze et al. 2004 §3.6, hinged roof, P2B-P2B quarter model n×n, against the first limit point of
 # Sze's Tables 9 (shells.HINGED_ROOF_LIMIT). Measured (constant arc from Δλ₀ = 0.02, limit load
 # by the parabola through the three highest samples), n = 4 / 8 / 12 / 16:

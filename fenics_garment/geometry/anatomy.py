@@ -22,8 +22,14 @@ centred near x = 0), not from fixed fractions of the stature:
   going up, the girth first exceeds ``HEAD_FLARE`` × the neck girth (the jaw).
 * **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
   the upper arms never count; below the armpits the torso outline is on its own.
-* Waist, hip, bust, under-bust: the narrowest / widest torso girths in their ranges (see
-  :func:`torso_levels`); knee, calf, ankle: the narrowest / widest leg girths.
+* **Bust**: the level of the bust points, the most forward points of the chest going down
+  from the armpits (ISO 8559-1 bust girth: across the bust points); **under-bust**: just below
+  the breasts, at the inframammary fold — the front under the bust points recedes below them
+  and comes forward again (a small breast), or drops off the breast's underside (a large one);
+  on a flat chest, a fixed share of the way from the bust to the waist; **waist**: the natural
+  waist, the narrowest torso girth below the under-bust; **hip**: the widest girth between the
+  thighs and the waist (:func:`torso_levels`). Knee, calf, ankle: the narrowest / widest leg
+  girths.
 * **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
   perpendicular to it, elbows and wrists, knees and ankles found on the limb itself
   (:attr:`Anatomy.limbs`; their centreline points in :attr:`Anatomy.points` as
@@ -58,6 +64,27 @@ HEAD_FLARE = 1.25
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
+#: Depth [fraction of the stature] by which the front must recede below the bust's most forward
+#: point, and come forward again below the inframammary fold, for either to count: 0.2 %, 3.3 mm
+#: on a 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and
+#: the front of its chest wobbles by about 1 mm between sections (its facets are 1 cm across).
+FOLD_DEPTH = 0.002
+#: A drop of the front under the bust points by more than this many FOLD_DEPTHs between two
+#: sections of the fold search (2.5 mm apart on a 1.67 m body) is the underside of a large
+#: breast seen from the front: the fold is just below it (MakeHuman's female body with its
+#: largest cup: 2–3 cm a step at the breast's lower edge; elsewhere below 0.3 cm a step).
+FOLD_CLIFF = 4.0
+#: How far below the bust point the fold is looked for [fraction of the stature]: the lower half
+#: of a breast, 2.5 cm (MakeHuman's base mesh) to 8 cm (its female body with the largest cup);
+#: 6 %, 10 cm on a 1.67 m body. A flat chest has none within it.
+FOLD_REACH = 0.06
+#: A flat chest (no fold within FOLD_REACH): the under-bust this share of the way from the bust
+#: down to the narrowest girth (MakeHuman's male body: its underbust measuring loop 6.7 cm under
+#: the nipples, 35 % of the 19 cm from the nipples to the narrowest girth; our assumption)
+FLAT_UNDERBUST = 0.35
+#: The bust points are looked for within this share of the torso's width either side of its
+#: middle (MakeHuman's bodies: 0.26–0.37 at the bust points' level).
+BUST_REGION = 0.45
 #: landmark levels a scene may override (heights in metres above the floor)
 LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
@@ -205,6 +232,10 @@ def analyse(
     def girth(z: float) -> float:
         return sec.tape_girth(torso_section(v, t, z, cut, z_ap))
 
+    def front(z: float) -> Array | None:  # the torso outline below the armpits (bust search)
+        o = torso_outline(v, t, z)
+        return None if o is None else o.points
+
     if armpit:
         z_armpit = min(armpit.values())
         z_shoulder = 0.5 * (pts["shoulder_left"][2] + pts["shoulder_right"][2])
@@ -223,7 +254,7 @@ def analyse(
     if head is not None:
         marks["head"] = head
     marks["neck_base"] = z_shoulder + 0.6 * (neck - z_shoulder)
-    marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H))
+    marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front))
     marks.update(leg_levels(v, t, crotch, H))
     if overrides:
         marks.update(overrides)
@@ -322,12 +353,24 @@ def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[fl
     return float(best_z), None
 
 
-def torso_levels(girth, crotch: float, armpit: float, shoulder: float, H: float) -> dict:
-    """Waist = narrowest torso girth in the middle half between crotch and armpit; hip = widest
-    between 3 % of the stature above the crotch (below, the tape spans both thighs) and the
-    waist; bust = widest between waist and armpit; under-bust = narrowest
-    between waist and bust; abdomen half-way hip–waist; upper chest 40 % of the way from the
-    bust to the shoulder (our convention, as in the parametric mannequin's proportions)."""
+def torso_levels(
+    girth, crotch: float, armpit: float, shoulder: float, H: float, outline=None
+) -> dict:
+    """Torso levels from the girth (``girth(z)``, the tape girth of the torso) and the torso's
+    outline below the armpits (``outline(z)``: its points, or None):
+
+    * bust: the bust points' level — going down from the armpits, the most forward point of the
+      chest's front (within :data:`BUST_REGION` of the width of the middle) before the front
+      recedes by :data:`FOLD_DEPTH` (:func:`bust_level`); without such a point, or without
+      ``outline``, the widest girth between waist and armpit;
+    * under-bust: the inframammary fold under the bust points (:func:`fold_level`), or on a flat
+      chest :data:`FLAT_UNDERBUST` of the way from the bust down to the narrowest girth;
+    * waist: the narrowest girth between a quarter of the crotch–armpit span and the under-bust
+      (1 % of the stature below it), at most three quarters up the span;
+    * hip: the widest girth between 3 % of the stature above the crotch (below, the tape spans
+      both thighs) and the waist; abdomen half-way hip–waist; upper chest 40 % of the way from
+      the bust to the shoulder (our convention, as in the parametric mannequin's
+      proportions)."""
     span = armpit - crotch
     zs = np.linspace(crotch + 0.005 * H, armpit - 0.002 * H, 90)
     g = np.array([girth(z) for z in zs])
@@ -339,11 +382,19 @@ def torso_levels(girth, crotch: float, armpit: float, shoulder: float, H: float)
         i = np.flatnonzero(sel)[fn(g[sel])]
         return float(zs[i])
 
-    waist = arg(np.argmin, crotch + 0.25 * span, crotch + 0.75 * span)
+    narrowest = arg(np.argmin, crotch + 0.25 * span, crotch + 0.75 * span)
+    found = None
+    if outline is not None:
+        found = bust_level(outline, narrowest + 0.01 * H, armpit - 0.002 * H, H)
+    if found is None:  # no forward bust point: the widest girth
+        bust, under = arg(np.argmax, narrowest + 0.04 * H, armpit), None
+    else:
+        bust, half_gap = found
+        under = fold_level(outline, bust, half_gap, max(narrowest, bust - FOLD_REACH * H), H)
+    if under is None:
+        under = bust - FLAT_UNDERBUST * (bust - narrowest)
+    waist = arg(np.argmin, crotch + 0.25 * span, min(crotch + 0.75 * span, under - 0.01 * H))
     hip = arg(np.argmax, crotch + 0.03 * H, waist - 0.02 * H)  # not the span across the thighs
-    bust = arg(np.argmax, waist + 0.04 * H, armpit)
-    under = arg(np.argmin, waist + 0.01 * H, bust - 0.01 * H) if bust - waist > 0.03 * H else (
-        0.5 * (waist + bust))  # fmt: skip
     return {
         "hip": hip,
         "abdomen": 0.5 * (hip + waist),
@@ -352,6 +403,72 @@ def torso_levels(girth, crotch: float, armpit: float, shoulder: float, H: float)
         "bust": bust,
         "upper_chest": bust + 0.4 * (shoulder - bust),
     }
+
+
+def _front_of(p: Array, near) -> float | None:
+    """The forward projection (−y) of the most forward point of outline ``p`` among the points
+    whose lateral offset from the outline's middle satisfies ``near(offset, width)``."""
+    xc = 0.5 * (p[:, 0].max() + p[:, 0].min())
+    w = float(np.ptp(p[:, 0]))
+    sel = near(np.abs(p[:, 0] - xc), w) & (p[:, 1] < p[:, 1].mean())
+    return float(-p[sel, 1].min()) if sel.any() else None
+
+
+def bust_level(outline, lo: float, hi: float, H: float) -> tuple[float, float] | None:
+    """Going down from ``hi`` in steps of 0.15 % of the stature: the height of the chest's most
+    forward point before the front recedes by :data:`FOLD_DEPTH` (the bust points), and their
+    half-distance (lateral offset from the middle); None if the front keeps coming forward down
+    to ``lo`` (no bust points)."""
+    best_z, best_f = None, -np.inf
+    for z in np.arange(hi, lo, -0.0015 * H):
+        p = outline(z)
+        f = None if p is None else _front_of(p, lambda d, w: d <= BUST_REGION * w)
+        if f is None:
+            continue
+        if f > best_f:
+            best_z, best_f = float(z), f
+        elif f < best_f - FOLD_DEPTH * H:
+            break
+    else:
+        return None
+    p = outline(best_z)
+    xc = 0.5 * (p[:, 0].max() + p[:, 0].min())
+    w = float(np.ptp(p[:, 0]))
+    gaps = []
+    for side in (1.0, -1.0):
+        d = side * (p[:, 0] - xc)
+        sel = (d >= 0.1 * w) & (d <= BUST_REGION * w) & (p[:, 1] < p[:, 1].mean())
+        if sel.any():
+            gaps.append(float(d[sel][np.argmin(p[sel, 1])]))
+    return best_z, (float(np.mean(gaps)) if gaps else 0.25 * w)
+
+
+def fold_level(outline, bust: float, half_gap: float, lo: float, H: float) -> float | None:
+    """The inframammary fold: going down from the ``bust`` level in steps of 0.15 % of the
+    stature, the front under the bust points (within 35 % of ``half_gap`` of their lateral
+    offset) recedes and then either comes forward again by :data:`FOLD_DEPTH` (the fold is the
+    level where it was furthest back) or drops by :data:`FOLD_CLIFF` FOLD_DEPTHs within one step
+    (a large breast's underside: the fold is just below it). None when neither happens before
+    ``lo`` (a flat chest)."""
+
+    def near(d, w):
+        return np.abs(d - half_gap) <= 0.35 * half_gap
+
+    step = 0.0015 * H
+    low_z, low_f, prev = None, np.inf, None
+    for z in np.arange(bust, lo, -step):
+        p = outline(z)
+        f = None if p is None else _front_of(p, near)
+        if f is None:
+            continue
+        if prev is not None and prev - f > FOLD_CLIFF * FOLD_DEPTH * H:
+            return float(z)
+        if f < low_f:
+            low_z, low_f = float(z), f
+        elif f > low_f + FOLD_DEPTH * H:
+            return low_z
+        prev = f
+    return None
 
 
 def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:

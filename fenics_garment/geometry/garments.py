@@ -146,6 +146,9 @@ class GarmentSurface:
     info: dict[str, float] = field(default_factory=dict)
     #: the limb a sleeve or stocking follows on a scan (:class:`~.limbs.Limb`), or None
     frame: Any = None
+    #: a garment sewn from flat pattern pieces: the flat coordinates of every cell's nodes
+    #: (:class:`fenics_garment.shell.rest.FlatCells`), or None
+    rest: Any = None
 
     def axial(self, points: Array) -> Array:
         """The garment's level coordinate of points: their height, or on a limb of a scan the
@@ -401,6 +404,17 @@ def _build(
         faces = [dt for dt in faces if dt[0] == 2]
         if not faces:
             raise GeometryError(f"{kind}: the cuts removed the whole garment")
+    princess = getattr(classify, "princess", None)
+    if princess:  # vertical seams x = ±princess: the loft's faces split by two planes
+        big = 4.0
+        planes = []
+        for x in (princess, -princess):
+            r = occ.addRectangle(-big / 2, -big / 2, 0.0, big, big)
+            occ.rotate([(2, r)], 0, 0, 0, 0, 1, 0, np.pi / 2)  # into the plane x = 0
+            occ.translate([(2, r)], x, 0.0, 0.0)
+            planes.append((2, r))
+        _, pieces = occ.fragment(faces, planes)
+        faces = [dt for m in pieces[: len(faces)] for dt in m if dt[0] == 2]
     occ.synchronize()
     _remove_all_but(g, faces)
     zc, cc = _centre_of(levels)
@@ -656,22 +670,40 @@ def _first_line(e: BaseException) -> str:
 
 
 class _TorsoClassifier:
-    """Panels by the side of the face's centre of mass; edges by position and valence."""
+    """Panels by the side of the face's centre of mass; edges by position and valence.
 
-    def __init__(self, z_hem, z_top, z_arm, x_neck, gap):
+    ``princess``: the x (m) of vertical princess seams either side of the centre, front and
+    back (None: none); the pieces outside them are ``front_side_left``/``_right`` and
+    ``back_side_left``/``_right``, their seams ``princess_front_left``… . ``y_mid``: the
+    body's centre depth, which tells a front seam from a back one.
+    """
+
+    def __init__(self, z_hem, z_top, z_arm, x_neck, gap, princess=None, y_mid=0.0):
         self.z_hem, self.z_top, self.z_arm, self.x_neck, self.gap = z_hem, z_top, z_arm, x_neck, gap
+        self.princess, self.y_mid = princess, y_mid
 
     def panel(self, x: float, dy: float) -> str:
+        side = "left" if x > 0 else "right"
         if dy > 0:
-            return "back"
+            return f"back_side_{side}" if self.princess and abs(x) > self.princess else "back"
+        if self.princess and abs(x) > self.princess:
+            return f"front_side_{side}"
         if self.gap:
             return "front_left" if x > 0 else "front_right"
         return "front"
 
     def edge(self, bb, n_faces: int) -> str | None:
-        x0, _, z0, x1, _, z1 = bb
+        x0, y0, z0, x1, y1, z1 = bb
         xc, zc = 0.5 * (x0 + x1), 0.5 * (z0 + z1)
         side = "left" if xc > 0 else "right"
+        if (
+            n_faces == 2
+            and self.princess
+            and x1 - x0 < 1e-3
+            and (abs(abs(xc) - self.princess) < 1e-3)
+        ):
+            part = "back" if 0.5 * (y0 + y1) > self.y_mid else "front"
+            return f"princess_{part}_{side}"
         if n_faces == 2:
             return f"side_seam_{side}" if zc < self.z_arm else f"shoulder_seam_{side}"
         if self.gap and x1 - x0 < 1e-3 and abs(abs(xc) - self.gap / 2) < 1e-3:
@@ -703,7 +735,8 @@ class _TubeClassifier:
 
 _TORSO_EDGES = ("hem", "neckline", "armhole_left", "armhole_right", "side_seam_left",
                 "side_seam_right", "shoulder_seam_left", "shoulder_seam_right", "opening_left",
-                "opening_right")  # fmt: skip
+                "opening_right", "princess_front_left", "princess_front_right",
+                "princess_back_left", "princess_back_right")  # fmt: skip
 #: the edges each garment kind names (its classifier above: _TorsoClassifier, _TubeClassifier)
 EDGE_NAMES = {
     "gilet": _TORSO_EDGES,
@@ -728,6 +761,11 @@ GILET_EASE = {
     "hip": 0.04, "abdomen": 0.04, "waist": 0.03, "underbust": 0.03, "bust": 0.03,
     "upper_chest": 0.03, "shoulder": 0.02, "neck_base": 0.15,
 }  # fmt: skip
+
+
+def _y_mid(levels: dict[str, tuple[float, Array]]) -> float:
+    """The mean depth (y) of the garment's level sections: the plane between front and back."""
+    return float(np.mean([sec[:, 1].mean() for _, sec in levels.values()]))
 
 
 def _top_cuts(
@@ -796,6 +834,7 @@ def make_gilet(
     order: int = 2,
     comm: Any | None = None,
     refine: EdgeRefinement | None = None,
+    princess: float | None = None,
 ) -> GarmentSurface:
     """A sleeveless gilet from ``hem`` level (2.5 cm below it) to the base of the neck.
 
@@ -813,6 +852,9 @@ def make_gilet(
         quads: quadrilateral cells (gmsh recombination) instead of triangles.
         order: geometry degree of the DOLFINx mesh, 2 (curved, default) or 1 (module doc, 5).
         comm: MPI communicator: build on its rank 0 and distribute as a DOLFINx mesh.
+        princess: princess seams at x = ±princess (m), front and back (None: none), which
+            split the front and back into a centre and two side pieces each: the seams that
+            let flat pattern pieces follow the bust and the shoulder blades.
     """
     torso = ["hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder"]
     names = ["hem", *torso[torso.index(hem) :], "neck_base", "neck"]
@@ -825,7 +867,8 @@ def make_gilet(
     cuts, x_neck, z_arm = _top_cuts(
         body, levels, strap, armhole_drop, neck_scoop, 0.0, front_opening, z_hem, z_top
     )
-    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, front_opening)
+    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, front_opening, princess,
+                           _y_mid(levels))  # fmt: skip
     return _finish(
         "gilet",
         comm,
@@ -855,13 +898,14 @@ def make_dress(
     order: int = 2,
     comm: Any | None = None,
     refine: EdgeRefinement | None = None,
+    princess: float | None = None,
 ) -> GarmentSurface:
     """A one-piece dress: fitted bodice with shoulder straps (cut by wide armholes and front and
     back scoops) and a flared skirt hanging ``length`` (m) below the hip level.
 
     The skirt sections are the hip section offset further, linearly in height, so that the hem
     girth is ``(1 + ease_hip + flare) ×`` the hip girth; rows ``skirt_k`` of the table report
-    that against the hip girth.
+    that against the hip girth. ``princess``: princess seams as in :func:`make_gilet`.
     """
     e = _ease_dict(ease, DRESS_EASE)
     z_hip = body.landmarks["hip"]
@@ -887,7 +931,7 @@ def make_dress(
     cuts, x_neck, z_arm = _top_cuts(
         body, levels, strap, armhole_drop, neck_scoop, back_scoop, None, z_hem, z_top
     )
-    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None)
+    cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None, princess, _y_mid(levels))
     return _finish(
         "dress",
         comm,

@@ -118,6 +118,10 @@ class GarmentConfig:
     refine_edges: list[str] = field(default_factory=list)
     edge_ratio: float = 0.25
     edge_band: float = 0.04
+    #: the stress-free state: "pattern" (each panel flattened into its flat pattern piece,
+    #: pattern.flatten; flat rest metric, zero rest curvature: the fabric strains where the
+    #: body is doubly curved) or "loft" (the body-fitted 3D garment itself is stress free)
+    rest: str = "loft"
 
 
 @dataclass(frozen=True)
@@ -170,6 +174,10 @@ class DressingConfig:
     steps: int = 4
     margin: float = 0.002  # shrink beyond the deepest initial penetration [m]
     max_cuts: int = 4  # halvings of a failed step before giving up
+    #: a garment whose rest state is flat pattern pieces (``garment.rest = "pattern"``) is
+    #: sewn once the body has grown: its rest state goes from the placed mesh to the pattern
+    #: in this many equal steps of the sewing parameter w (``shell.rest.FlatRest.sewn``)
+    sew_steps: int = 4
     regularisation: float = 1e-2
     spring_length: float = 0.03  # L [m] of the spring's scale E h / L²
     grow: float = 1.5  # step growth after an easy step (adaptive schedule)
@@ -272,12 +280,49 @@ EASE_LEVELS = {
 SIDES = ("left", "right")
 CONTACT_METHODS = ("penalty", "augmented-lagrangian")
 GEOMETRIES = ("auto", "curved", "straight")
+RESTS = ("loft", "pattern")  # scene.build: the garment's stress-free state
 DRESSING_SCHEDULES = ("fixed", "adaptive")  # scene.dressing.dress
 DRESSING_PREDICTORS = ("none", "secant")  # scene.dressing.dress
 SPRING_ANCHORS = ("previous", "start")  # scene.build.Regularisation
 BODY_SURFACES = ("faceted", "smooth")  # contact.search.SearchSurface | contact.smooth.SmoothBody
 TISSUES = ("rigid", "soft")
 ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
+
+#: Accepted ranges (lo, hi, unit, why) of the lengths and stiffnesses that enter the arithmetic
+#: squared or as a divisor — κ = κ̂ E h / ℓ², c = c₀ E h / L², k = E / depth — refused on load
+#: outside them: far outside they overflow or divide by zero deep inside the build (1e300² = inf,
+#: 1 / 1e-300² = inf: an OverflowError, not a message), and well before that the run means
+#: nothing. Each range spans what a garment on a body can mean, with room to spare; a 0 that
+#: means "the default rule" (penalty_length, stick_stiffness) is accepted besides.
+#:
+#: * ``physics.penalty_length``, ``dressing.spring_length``: a length of the garment over which
+#:   its membrane stiffness E h is spread, from a fabric's thickness (0.1 mm) to 10 m (beyond
+#:   any body). At 0.1 mm the stiffness is 1.6·10⁵ × the default ℓ = 4 cm's — the end of what
+#:   preflight's κ̂ range (up to 10⁵ × its default) lets the linear solves resolve; at 10 m it is
+#:   1.6·10⁻⁵ of it, a garment held by nothing.
+#: * ``body.tissue_depth``: soft tissue over bone, from 1 mm (over the shin or the skull) to
+#:   50 cm (no body part has more); the Winkler stiffness E / depth and the stick stiffness
+#:   G / depth (the default of ``stick_stiffness``) divide by it.
+#: * ``physics.stick_stiffness``: up to 10⁹ Pa/m, a shear modulus of 1 MPa (ten times the
+#:   stiffest skin's ~0.1 MPa) over 1 mm of tissue; the seed paper's tissue over 2 cm gives
+#:   3.4·10⁵ Pa/m. At 1e300 the friction law's tangent swamps every other term (exit 3 after
+#:   the first solve).
+#: * ``dressing.margin``: the extra shrink of the body below the garment, up to 1 m (it is a few
+#:   millimetres; preflight checks it against the body's radius once the body is built).
+#: * ``garment.edge_band``: the band over which refined edge cells grow back to the mesh size,
+#:   from 0.1 mm to 10 m.
+LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
+    "physics.penalty_length": (1e-4, 10.0, "m", "a length of the garment (κ = κ̂ E h / ℓ²); 0: "
+                               "the garment's largest cell"),
+    "dressing.spring_length": (1e-4, 10.0, "m", "a length of the garment (c = c₀ E h / L²)"),
+    "body.tissue_depth": (1e-3, 0.5, "m", "soft tissue over bone"),
+    "physics.stick_stiffness": (0.0, 1e9, "Pa/m", "1 MPa of shear over 1 mm of tissue; 0: the "
+                                "skin's G / body.tissue_depth"),
+    "dressing.margin": (0.0, 1.0, "m", "an extra shrink of the body of a few millimetres"),
+    "garment.edge_band": (1e-4, 10.0, "m", "the band of refined cells along an edge"),
+}  # fmt: skip
+#: of the keys above, those where 0 selects a default rule (accepted besides the range)
+ZERO_MEANS_DEFAULT = ("physics.penalty_length",)
 
 
 def load_terms(spec: str, source: str = "") -> Callable[[Any], None] | None:
@@ -427,6 +472,18 @@ def _one_of(value: str, allowed: tuple[str, ...], src: str, key: str) -> None:
         raise SceneError(src, key, f"must be one of {', '.join(allowed)}; got {value!r}{hint}")
 
 
+def _check_ranges(s: Scene) -> None:
+    """Every key of :data:`LENGTH_RANGES` within its range (one line: file, key, range, why)."""
+    for key, (lo, hi, unit, why) in LENGTH_RANGES.items():
+        section, name = key.split(".")
+        v = getattr(getattr(s, section), name)
+        if v == 0.0 and key in ZERO_MEANS_DEFAULT:
+            continue
+        _require(lo <= v <= hi, s.source, key,
+                 f"= {v:g} {unit} is outside the accepted range [{lo:g}, {hi:g}] {unit} "
+                 f"({why})")  # fmt: skip
+
+
 def _check(s: Scene) -> None:
     from fenics_garment.geometry.mannequin import ARM_LEVELS
     from fenics_garment.geometry.measurements import SIZE_CODES, Measurements
@@ -496,6 +553,7 @@ def _check(s: Scene) -> None:
     _one_of(g.fabric, tuple(FABRICS), src, "garment.fabric")
     _one_of(g.element, ELEMENTS, src, "garment.element")
     _one_of(g.geometry, GEOMETRIES, src, "garment.geometry")
+    _one_of(g.rest, RESTS, src, "garment.rest")
     _require(g.per_turn >= 8, src, "garment.per_turn", f"must be at least 8, got {g.per_turn}")
     _require(g.mesh_size > 0, src, "garment.mesh_size", f"must be positive, got {g.mesh_size}")
     _require(0 < g.edge_ratio <= 1, src, "garment.edge_ratio",
@@ -561,6 +619,7 @@ def _check(s: Scene) -> None:
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
              f"got {s.name!r}")  # fmt: skip
+    _check_ranges(s)
 
 
 def _plain_name(name: str) -> bool:

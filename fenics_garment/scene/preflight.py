@@ -283,6 +283,59 @@ def initial_depth(built, penetration0: float) -> None:
         )
 
 
+#: Peak memory of a direct (MUMPS) solve per degree of freedom [bytes]: the resident memory of
+#: one Newton iteration over its dofs, measured on the P2B-P2B tube on a 10 m cylinder (one rank,
+#: LU with friction): 1.91 GB at 333,516 dofs, 7.03 GB at 1,276,344 (5.7 and 5.5 kB a dof).
+DIRECT_BYTES_PER_DOF = 6.0e3
+#: Dofs per MPI rank from which a run is announced as large before its forms are compiled, and
+#: its Newton iterations are then reported as they go (``scene.run``): one iteration took 10.6 s
+#: at 333,516 dofs and 97 s at 1,276,344 on one rank of the 2-core development machine (the 10 m
+#: tube that ran for minutes without a line after "compiling the forms").
+LARGE_DOFS_PER_RANK = 250_000
+#: Share of the machines' memory that a direct solve may be estimated to take.
+MEMORY_SHARE = 0.8
+
+
+def machine_memory(comm: MPI.Comm) -> float:
+    """Physical memory [bytes] of the machines the ranks of ``comm`` run on (each host once)."""
+    try:
+        mine = float(os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE"))
+    except (ValueError, OSError, AttributeError):  # not a POSIX system: no limit known
+        mine = math.inf
+    hosts = dict(comm.allgather((MPI.Get_processor_name(), mine)))
+    return float(sum(hosts.values()))
+
+
+def problem_size(scene, dofs: int, comm: MPI.Comm) -> str | None:
+    """Refuse a problem whose direct solve would not fit in the machines' memory (estimated at
+    :data:`DIRECT_BYTES_PER_DOF`), naming the mesh size that would; a one-line notice for a
+    large one (more than :data:`LARGE_DOFS_PER_RANK` dofs per rank), else None."""
+    src = scene.source or scene.name
+    h = scene.garment.mesh_size
+    need = DIRECT_BYTES_PER_DOF * dofs
+    per_rank = dofs / comm.size
+    if scene.solver.linear == "direct":
+        have = MEMORY_SHARE * machine_memory(comm)
+        if need > have:
+            h_fit = h * math.sqrt(need / have)
+            raise PreflightError(
+                f"{src}: [garment.mesh_size] = {h:g} m makes {dofs:,} dofs: a direct solve "
+                f"needs about {need / 1e9:.3g} GB, more than the {have / 1e9:.3g} GB this "
+                f"machine can give ({MEMORY_SHARE:.0%} of its memory); use garment.mesh_size >= "
+                f'{h_fit:.2g} m, or solver.linear = "gamg" on more ranks'
+            )
+    if per_rank <= LARGE_DOFS_PER_RANK:
+        return None
+    h_ok = h * math.sqrt(per_rank / LARGE_DOFS_PER_RANK)
+    memory = f", about {need / 1e9:.2g} GB for the direct solver" if "direct" in (
+        scene.solver.linear) else ""  # fmt: skip
+    return (
+        f"a large problem: {dofs:,} dofs on {comm.size} rank(s){memory}; a Newton "
+        f"iteration may take minutes (each one is reported); garment.mesh_size >= "
+        f"{h_ok:.2g} m would keep to {LARGE_DOFS_PER_RANK:,} dofs a rank"
+    )
+
+
 def check_built(built) -> float:
     """The checks that need the built scene; returns the initial penetration [m]."""
     from fenics_garment.scene.dressing import initial_penetration

@@ -458,6 +458,8 @@ def build_stage(
         f"{built.dofs} dofs ({elapsed:.1f} s)")  # fmt: skip
     if (warning := element_warning(built.model.variant)) is not None:
         say("  " + warning)
+    if (notice := preflight.problem_size(scene, built.dofs, comm)) is not None:
+        say("  " + notice)
     if check:
         preflight.check_built(built)
     return built
@@ -492,8 +494,11 @@ def solve_stage(
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     solver = scene_solver(built)
+    solver.progress = _slow_iterations(say)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
+    if times["jit"] >= SLOW_ITERATION_S:  # the JIT, or the Jacobian's sparsity of a large mesh
+        say(f"  forms compiled and the Jacobian allocated ({times['jit']:.0f} s)")
     t0 = time.perf_counter()
     progress = start
     if meta is not None:
@@ -533,6 +538,20 @@ def solve_stage(
         frames.write()
     frames.close(comm)
     return Solved(solver, report, completed, message)
+
+
+#: A Newton iteration longer than this [s] is reported when it ends (``NonlinearSolver.progress``):
+#: a large problem (``preflight.problem_size``) would otherwise print nothing for minutes between
+#: two dressing steps (the 10 m tube: 97 s an iteration on one rank).
+SLOW_ITERATION_S = 10.0
+
+
+def _slow_iterations(say: Callable[..., object]) -> Callable[[int, float, float], None]:
+    def progress(its: int, fnorm: float, seconds: float) -> None:
+        if seconds >= SLOW_ITERATION_S:
+            say(f"    Newton iteration {its}: residual {fnorm:.3g} ({seconds:.0f} s)")
+
+    return progress
 
 
 def scene_solver(built: scene_build.Built) -> NonlinearSolver:
@@ -654,12 +673,13 @@ def _dress(
             frames.write()
         cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
         what = (f"shrink {rec.shrink * 1e3:6.2f} mm" if rec.stage == "dress"
+                else f"sewn {rec.shrink:10.3f}   " if rec.stage == "sew"
                 else f"spring c {rec.regularisation:8.2g} Pa/m")  # fmt: skip
         say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
 
-    def on_failure(target: float, its: int, reason: int) -> None:
-        say(f"  shrink → {target * 1e3:6.2f} mm failed (SNES reason {reason}, {its} its): "
-            "halving the step")  # fmt: skip
+    def on_failure(target: float, its: int, reason: int, what: str = "shrink") -> None:
+        to = f"{target * 1e3:6.2f} mm" if what == "shrink" else f"{target:.3f}"
+        say(f"  {what} → {to} failed (SNES reason {reason}, {its} its): halving the step")
 
     write_ckpt = (lambda pr: ckpt.write(built, pr)) if ckpt is not None else None
     try:
@@ -670,7 +690,8 @@ def _dress(
                        friction_while_growing=d.friction_while_growing,
                        release_ratio=d.release_ratio, predictor=d.predictor,
                        path_tolerance=d.path_tolerance,
-                       release_multipliers=d.release_multipliers)  # fmt: skip
+                       release_multipliers=d.release_multipliers,
+                       sew_steps=d.sew_steps)  # fmt: skip
     except DressingFailed as err:
         say("  " + str(err))
         return err.report, False, str(err)

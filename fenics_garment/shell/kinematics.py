@@ -216,13 +216,26 @@ def shell_kinematics(
     gd = ufl.grad(d)
     gde = (gd * e1, gd * e2)
     Pd0 = P * ufl.grad(d0)
-    eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - (1.0 if a == b else 0.0))
+    # rest metric and curvature: the mesh's own (a curved mesh is stress free), or those of
+    # flat panels (metric δ in their frame, curvature 0), reached from the mesh's as the
+    # sewing parameter w of the flat rest state goes from 0 to 1 (w = 1: the pattern)
+    if geometry.rest is None:
+        metric = [[1.0, 0.0], [0.0, 1.0]]
+        w_mesh = None
+    else:
+        w = geometry.rest.sewn
+        metric = [[w * (1.0 if a == b else 0.0) + (1 - w) * ufl.dot(e[a], e[b])
+                   for b in range(2)] for a in range(2)]  # fmt: skip
+        w_mesh = 1 - w
+    eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - metric[a][b])
                           for b in range(2)] for a in range(2)])  # fmt: skip
-    # rest curvature: the mesh's own (a curved mesh is stress free), or 0 for flat panels
-    flat = geometry.rest is not None
+
+    def rest_curvature(a: int, b: int) -> ufl.core.expr.Expr:
+        k = 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a]))
+        return k if geometry.rest is None else w_mesh * k
+
     kap = ufl.as_matrix(
-        [[0.5 * (ufl.dot(Fe[a], gde[b]) + ufl.dot(Fe[b], gde[a]))
-          - (0 if flat else 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a])))
+        [[0.5 * (ufl.dot(Fe[a], gde[b]) + ufl.dot(Fe[b], gde[a])) - rest_curvature(a, b)
           for b in range(2)] for a in range(2)]
     )  # fmt: skip
     gam = ufl.as_vector([ufl.dot(Fe[a], d) - ufl.dot(e[a], d0) for a in range(2)])

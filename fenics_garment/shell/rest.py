@@ -26,6 +26,7 @@ starts with the membrane strain that the flat fabric needs to take that shape.
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -77,26 +78,34 @@ def check_dof_layout(mesh: dolfinx.mesh.Mesh) -> float:
     return float(np.abs(g - d).max()) if n else 0.0
 
 
-def flat_map_from_nodes(
-    mesh: dolfinx.mesh.Mesh, cell_nodes: npt.ArrayLike, cell_flat: npt.ArrayLike
-) -> dolfinx.fem.Function:
-    """The flat map from the mesh generator's arrays: for input (original) cell k, the input
-    node indices ``cell_nodes[k]`` (0-based, any order) and their flat coordinates
-    ``cell_flat[k]``. Every rank holds the whole arrays (they are small next to the mesh)."""
-    cn = np.asarray(cell_nodes, dtype=np.int64)
-    cf = np.asarray(cell_flat, dtype=np.float64)
-    n = _cell_count(mesh)
-    orig = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:n]
-    gidx = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
-    node_ids = gidx[mesh.geometry.dofmaps[0][:n]]  # (n, k) input ids in DOLFINx order
-    want = cn[orig]  # (n, k) input ids in the generator's order
-    # position of each DOLFINx node in the generator's list of the same cell
-    match = node_ids[:, :, None] == want[:, None, :]
-    if not np.all(match.sum(axis=2) == 1):
-        raise ValueError("flat map: a cell's nodes do not match the generator's cell")
-    pos = match.argmax(axis=2)
-    vals = np.take_along_axis(cf[orig], pos[:, :, None], axis=1)
-    return flat_map_from_cells(mesh, vals)
+@dataclass(eq=False)
+class FlatCells:
+    """The flat coordinates of every cell's nodes, as a mesh generator gives them: for input
+    (original) cell k, the input node indices ``cell_nodes[k]`` (0-based, e.g. gmsh's node
+    ids − 1, any order) and their flat (x, y) ``cell_flat[k]`` [m], x along the grain. Every
+    rank holds the whole arrays (small next to the mesh)."""
+
+    cell_nodes: npt.NDArray[np.int64]
+    cell_flat: npt.NDArray[np.float64]
+
+    def on_mesh(self, mesh: dolfinx.mesh.Mesh) -> np.ndarray:
+        """(local cells incl. ghosts, nodes per cell, 2): the flat coordinates in the order of
+        the DOLFINx geometry dofmap (matched by input node index: DOLFINx may reorder)."""
+        cn = np.asarray(self.cell_nodes, dtype=np.int64)
+        cf = np.asarray(self.cell_flat, dtype=np.float64)
+        n = _cell_count(mesh)
+        orig = np.asarray(mesh.topology.original_cell_index, dtype=np.int64)[:n]
+        gidx = np.asarray(mesh.geometry.input_global_indices, dtype=np.int64)
+        node_ids = gidx[mesh.geometry.dofmaps[0][:n]]  # (n, k) input ids in DOLFINx order
+        match = node_ids[:, :, None] == cn[orig][:, None, :]
+        if not np.all(match.sum(axis=2) == 1):
+            raise ValueError("flat map: a cell's nodes do not match the generator's cell")
+        pos = match.argmax(axis=2)
+        return np.take_along_axis(cf[orig], pos[:, :, None], axis=1)
+
+    def flat_map(self, mesh: dolfinx.mesh.Mesh) -> dolfinx.fem.Function:
+        """The flat map Y on ``mesh``."""
+        return flat_map_from_cells(mesh, self.on_mesh(mesh))
 
 
 def flat_map_from_function(
@@ -126,6 +135,10 @@ class FlatRest:
 
     def __init__(self, Y: dolfinx.fem.Function) -> None:
         self.Y = Y
+        #: the sewing parameter w ∈ [0, 1]: the rest metric and curvature are w × the flat
+        #: panels' + (1 − w) × the mesh's (w = 0: the placed mesh is stress free; the
+        #: dressing raises w to 1 before it grows the body, ``scene.dressing``)
+        self.sewn = dolfinx.fem.Constant(Y.function_space.mesh, dolfinx.default_scalar_type(1.0))
 
     @property
     def grad(self) -> ufl.core.expr.Expr:

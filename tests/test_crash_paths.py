@@ -1,0 +1,170 @@
+"""The crash paths of issue 40, each driven through the command line as a user meets it.
+
+* Lengths and stiffnesses that enter the arithmetic squared or as a divisor (``[physics]
+  penalty_length`` ℓ in κ = κ̂ E h / ℓ², ``[dressing] spring_length``, ``[body] tissue_depth``
+  …) at 1e300, 1e-300, inf or nan: before, ``fenics-garment run`` ended in ``internal error:
+  OverflowError`` / ``ZeroDivisionError`` (exit 1); now the scene is refused on load with one
+  line naming the file, the key and the accepted range (exit 2).
+* A 10 m cylinder with the tube demo's 2 cm garment mesh: 1,276,344 dofs, 97 s a Newton
+  iteration on one rank, and nothing printed after "compiling the forms" for minutes. Now the
+  run announces the large problem (dofs, memory, the mesh size that would be small), reports
+  every slow Newton iteration, and refuses before solving a problem whose direct solve would not
+  fit in the machine's memory.
+
+(The third, path following that stops exactly at a load or a displacement, is in
+``test_path.py``.)
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+import time
+from dataclasses import replace
+from pathlib import Path
+
+import pytest
+
+from fenics_garment import cli
+from fenics_garment._stack import MPI
+from fenics_garment.scene import config, preflight
+from fenics_garment.scene import run as scene_run
+
+ROOT = Path(__file__).resolve().parents[1]
+TUBE = ROOT / "demos" / "tube_on_cylinder.toml"
+pytestmark = pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="serial")
+
+
+def _tube(**changes) -> config.Scene:
+    s = config.load(TUBE)
+    s = replace(s, body=replace(s.body, mesh_size=0.01), output=replace(s.output, pictures=False))
+    for section, kw in changes.items():
+        s = replace(s, **{section: replace(getattr(s, section), **kw)})
+    return s
+
+
+def _write(path: Path, scene: config.Scene, section: str, key: str, value: float) -> Path:
+    """The scene's TOML with ``[section] key = value`` (TOML writes inf and nan as such)."""
+    lines = config.dumps(scene).splitlines()
+    at = lines.index(f"[{section}]")
+    end = next((i for i in range(at + 1, len(lines)) if lines[i].startswith("[")), len(lines))
+    text = "inf" if value == math.inf else "nan" if math.isnan(value) else repr(value)
+    lines = [x for x in lines[:end] if not x.startswith(f"{key} = ")] + [f"{key} = {text}"] + \
+        lines[end:]  # fmt: skip
+    path.write_text("\n".join(lines) + "\n")
+    return path
+
+
+CASES = [(k, v) for k, (lo, hi, *_) in config.LENGTH_RANGES.items() for v in (1e300, 1e-300)
+         if not lo <= v <= hi] + [
+    (k, v) for k in ("physics.penalty_length", "dressing.spring_length")
+    for v in (math.inf, math.nan)
+]  # fmt: skip
+
+
+@pytest.mark.parametrize("dotted, value", CASES, ids=[f"{k}={v:g}" for k, v in CASES])
+def test_extreme_lengths_are_refused_on_load_by_run(dotted, value, tmp_path, capsys):
+    section, key = dotted.split(".")
+    path = _write(tmp_path / "scene.toml", _tube(), section, key, value)
+    code = cli.main(["run", str(path), "-q", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip()
+    assert code == 2, err
+    assert err.startswith("error: ") and len(err.splitlines()) == 1, err
+    assert str(path) in err and f"[{dotted}]" in err, err
+    assert "accepted range" in err or "finite number" in err, err
+    assert "internal error" not in err
+
+
+def test_the_reported_cases_exit_2_in_a_real_process(tmp_path):
+    """The two reproductions of the issue, ``fenics-garment run`` in its own process: exit 2 and
+    one line (before: exit 1, ``internal error: OverflowError`` / ``ZeroDivisionError``)."""
+    s = _tube()
+    for dotted, value in (("physics.penalty_length", 1e300), ("dressing.spring_length", 1e-300)):
+        section, key = dotted.split(".")
+        path = _write(tmp_path / f"{key}.toml", s, section, key, value)
+        p = subprocess.run([sys.executable, "-m", "fenics_garment.cli", "run", str(path), "-q",
+                            "-o", str(tmp_path / "out")], capture_output=True, text=True,
+                           timeout=300, env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+        assert p.returncode == 2, p.stderr
+        lines = p.stderr.strip().splitlines()
+        assert len(lines) == 1 and f"[{dotted}]" in lines[0] and "[0.0001, 10] m" in lines[0]
+
+
+def test_the_ranges_admit_every_shipped_scene():
+    for path in [*(ROOT / "demos").glob("*.toml"), *(ROOT / "fenics_garment" / "scenes").glob(
+            "*.toml")]:  # fmt: skip
+        config.load(path)  # raises SceneError otherwise
+
+
+# -- the 10 m cylinder -------------------------------------------------------------------------
+def test_a_large_problem_is_announced_and_its_slow_iterations_reported(
+    tmp_path, capsys, monkeypatch
+):
+    """The run path of a large problem, on the small tube with the thresholds lowered: the notice
+    (dofs, memory, a mesh size) comes before the forms are compiled, and every Newton iteration
+    that takes longer than SLOW_ITERATION_S prints a line."""
+    monkeypatch.setattr(preflight, "LARGE_DOFS_PER_RANK", 1000)
+    monkeypatch.setattr(scene_run, "SLOW_ITERATION_S", 0.0)
+    path = tmp_path / "tube.toml"
+    path.write_text(config.dumps(_tube(output={"pictures": False, "vtx": False,
+                                                "xdmf": False})))  # fmt: skip
+    code = cli.main(["run", str(path), "--no-checkpoints", "-o", str(tmp_path / "out")])
+    out = capsys.readouterr().out
+    assert code == 0, out
+    lines = out.splitlines()
+    notice = next(i for i, x in enumerate(lines) if "a large problem:" in x)
+    compiling = next(i for i, x in enumerate(lines) if "compiling the forms" in x)
+    assert notice < compiling
+    assert "dofs on 1 rank(s)" in lines[notice] and "garment.mesh_size >= " in lines[notice]
+    iterations = [x for x in lines if x.strip().startswith("Newton iteration")]
+    assert len(iterations) >= 5 and "residual" in iterations[0]
+
+
+def test_a_problem_larger_than_the_memory_is_refused_before_solving(tmp_path, capsys, monkeypatch):
+    monkeypatch.setattr(preflight, "machine_memory", lambda comm: 50e6)  # 50 MB
+    path = tmp_path / "tube.toml"
+    path.write_text(config.dumps(_tube()))
+    assert cli.main(["run", str(path), "-q", "-o", str(tmp_path / "out")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "[garment.mesh_size]" in err, err
+    assert "dofs: a direct solve needs about" in err and "use garment.mesh_size >= " in err
+
+
+def test_the_notice_names_a_mesh_size_within_the_limit():
+    s = _tube(body={"radius": 10.0, "mesh_size": 0.5})
+    dofs = 1_276_344  # the 10 m tube at the demo's 2 cm garment mesh, as built
+    notice = preflight.problem_size(s, dofs, MPI.COMM_SELF)
+    assert notice is not None and "1,276,344 dofs on 1 rank(s)" in notice
+    h = float(notice.split("garment.mesh_size >= ")[1].split()[0])
+    assert dofs * (0.02 / h) ** 2 == pytest.approx(preflight.LARGE_DOFS_PER_RANK, rel=0.05)
+    assert preflight.problem_size(s, 100_000, MPI.COMM_SELF) is None
+
+
+@pytest.mark.slow
+def test_the_10_m_cylinder_says_what_it_does(tmp_path):
+    """The reported scene in its own process (the tube demo on a 10 m cylinder, body mesh 0.5 m):
+    the notice comes right after meshing, then the compile, then one line per Newton iteration
+    (measured: build 19–39 s, 97 s an iteration on one rank). The run is stopped after the first
+    iteration's line; it would take about an hour."""
+    s = _tube(body={"radius": 10.0, "mesh_size": 0.5})
+    path = tmp_path / "r10.toml"
+    path.write_text(config.dumps(s))
+    cmd = [sys.executable, "-u", "-m", "fenics_garment.cli", "run", str(path), "--no-checkpoints",
+           "-o", str(tmp_path / "out")]  # fmt: skip
+    p = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+    t0, seen = time.monotonic(), []
+    try:
+        for line in p.stdout:
+            seen.append((time.monotonic() - t0, line.rstrip()))
+            if "Newton iteration" in line or time.monotonic() - t0 > 900:
+                break
+    finally:
+        p.kill()
+        p.wait()
+    text = "\n".join(f"{t:6.1f} s  {x}" for t, x in seen)
+    print(text)
+    assert any("a large problem: 1,276,344 dofs" in x for _, x in seen), text
+    assert "Newton iteration 1: residual" in seen[-1][1], text
