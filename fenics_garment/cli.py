@@ -169,6 +169,11 @@ def _check(scene) -> int:
 
     comm = MPI.COMM_WORLD
     preflight.scene_limits(scene)
+    if scene.garment.kind == "pattern" and comm.rank == 0:
+        from fenics_garment.pattern.io import describe, read_pattern
+        from fenics_garment.scene.config import scene_file
+
+        print("\n".join(describe(read_pattern(scene_file(scene, scene.garment.pattern)))))
     built = build.build(scene, comm)
     pen = preflight.check_built(built)
     r, where = preflight.smallest_body_radius(built)
@@ -177,6 +182,16 @@ def _check(scene) -> int:
               f"(smallest radius {r * 1e3:.1f} mm, {where}); garment "
               f"{len(built.garment.cells)} cells, {built.dofs} dofs on {comm.size} rank(s); "
               f"initial penetration {max(pen, 0.0) * 1e3:.1f} mm")  # fmt: skip
+        g = built.garment
+        if g.rest is not None:
+            i = g.info
+            print(f"sewn: seam gap before merging {i.get('seam_gap_max', 0) * 1e3:.1f} mm, "
+                  f"edge strain against the flat pieces {i.get('strain_rms', 0):.2%} RMS, "
+                  f"{i.get('strain_max', 0):.1%} max, {i.get('inverted', 0)} folded cells")  # fmt: skip
+        if g.levels:
+            print("fit (level: body girth → garment girth, ease):  " + ";  ".join(
+                f"{lv.name} {lv.body_girth * 100:.1f} → {lv.garment_girth * 100:.1f} cm "
+                f"{lv.ease:+.1%}" for lv in g.levels))  # fmt: skip
     return 0
 
 

@@ -654,3 +654,30 @@ def write_pattern(pattern: Pattern, path: str | Path, *, units: str = "mm") -> N
         path,
         header="fenics-garment sewing pattern (format: fenics_garment/pattern/io.py)",
     )
+
+
+def describe(pattern: Pattern) -> list[str]:
+    """A pattern as lines for a user: each panel (size, area, grain, fabric, edges with their
+    lengths) and each seam and dart (the two sides' lengths and their difference)."""
+    lines = [f"pattern {pattern.name!r}: {len(pattern.panels)} panel(s), {len(pattern.seams)} "
+             f"seam(s) and dart(s){f' ({pattern.source})' if pattern.source else ''}"]  # fmt: skip
+    for p in pattern.panels.values():
+        pts = p.outline(0.005)
+        w, h = np.ptp(pts, axis=0) * 1e3
+        g = np.degrees(np.arctan2(p.grain[1], p.grain[0]))
+        lines.append(f"  panel {p.name}: {w:.0f} × {h:.0f} mm, {p.area * 1e4:.1f} dm², grain "
+                     f"{g:.0f}°, fabric {p.fabric or '(the scene’s)'}")  # fmt: skip
+        edges = ", ".join(f"{i}:{e.name or '-'} {e.length * 1e3:.1f}" for i, e in enumerate(p.edges))
+        lines.append(f"    edges [mm]: {edges}")
+    for i, s in enumerate(pattern.seams):
+        la, lb = pattern.range_length(s.a), pattern.range_length(s.b)
+        d = 100 * (la - lb) / max(la, lb)
+
+        def side(r) -> str:
+            e = pattern.panel(r.panel).edges[pattern.panel(r.panel).edge_index(r.edge)]
+            part = "" if (r.f0, r.f1) == (0.0, 1.0) else f" [{r.f0:g}…{r.f1:g}]"
+            return f"{r.panel}.{e.name or r.edge}{part}"
+
+        lines.append(f"  {s.kind} {pattern.seam_name(i)}: {side(s.a)} {la * 1e3:.1f} mm ↔ "
+                     f"{side(s.b)} {lb * 1e3:.1f} mm ({d:+.1f} %)")  # fmt: skip
+    return lines

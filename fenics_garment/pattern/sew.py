@@ -601,3 +601,31 @@ def pattern_garment(
     rest = FlatCells(data["cells6"], data["cell_flat"])
     surface = GarmentSurface(levels=[], meshdata=meshdata, info=info, rest=rest, **data["surface"])
     return surface, rest
+
+
+def fit_levels(garment: Any, body: Any) -> list[Any]:
+    """The fit of a sewn pattern, as the built-in garments' construction table: at each body
+    landmark level the garment crosses all round (a closed section), the body's tape girth,
+    the placed garment's girth, their ratio − 1 as the ease, and the clearance (girth
+    difference / 2π). Measured on the sewn mesh before dressing: the pattern's own sizing."""
+    from fenics_garment.geometry import sections as sec
+    from fenics_garment.geometry.errors import MissingRegion
+    from fenics_garment.geometry.garments import GarmentLevel
+
+    z = garment.points[:, 2]
+    lo, hi = z.min() + 0.01, z.max() - 0.01
+    rows = []
+    for name, zl in sorted(body.landmarks.items(), key=lambda kv: kv[1]):
+        if not lo < zl < hi:
+            continue
+        chains = sec.slice_chains(garment.points, garment.triangles(), zl)
+        if not chains or not all(closed for _, closed in chains):
+            continue  # an armhole or an open front: not a girth
+        try:
+            g_body = body.girth(name)
+        except (MissingRegion, ValueError):
+            continue
+        g = sum(sec.perimeter(p, closed=True) for p, _ in chains)
+        rows.append(GarmentLevel(name, float(zl), g_body, g / g_body - 1.0, g,
+                                 (g - g_body) / (2 * np.pi)))  # fmt: skip
+    return rows

@@ -9,7 +9,6 @@ body, gravity, and a pseudo-time regularisation that the dressing drives to zero
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from pathlib import Path
 
 import numpy as np
 
@@ -20,7 +19,7 @@ from fenics_garment.contact.smooth import SmoothBody
 from fenics_garment.geometry import garments as gm
 from fenics_garment.geometry.body import BodySurface
 from fenics_garment.materials import Fabric, fabric
-from fenics_garment.scene.config import DressingConfig, Scene
+from fenics_garment.scene.config import DressingConfig, Scene, scene_file
 from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ELEMENTS, ShellModel
 
@@ -40,10 +39,7 @@ def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
         elif b.kind == "scan":
             from fenics_garment.geometry.scan import load_scan
 
-            path = Path(b.file)
-            if not path.is_absolute() and scene.source:
-                path = Path(scene.source).parent / path
-            body, _ = load_scan(path, units=b.units or None, up=b.up or None,
+            body, _ = load_scan(scene_file(scene, b.file), units=b.units or None, up=b.up or None,
                                 max_hole_edges=b.max_hole_edges, scale=b.scale or None,
                                 remesh=b.mesh_size if b.remesh else None,
                                 landmarks=dict(b.landmarks) or None)  # fmt: skip
@@ -71,6 +67,14 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
         kw["ease"] = g.ease
     if g.refine_edges:
         kw["refine"] = gm.EdgeRefinement(tuple(g.refine_edges), g.edge_ratio, g.edge_band)
+    if g.kind == "pattern":
+        from fenics_garment.pattern.io import read_pattern
+        from fenics_garment.pattern.sew import fit_levels, pattern_garment
+
+        pattern = read_pattern(scene_file(scene, g.pattern))
+        garment = pattern_garment(pattern, body, kw["h"], comm, kw["order"], kw.get("refine"))[0]
+        garment.levels = fit_levels(garment, body)
+        return garment
     if g.kind in ("gilet", "dress") and g.rest == "pattern":
         kw["princess"] = princess_offset(body)
     if g.kind == "gilet":

@@ -122,6 +122,10 @@ class GarmentConfig:
     #: pattern.flatten; flat rest metric, zero rest curvature: the fabric strains where the
     #: body is doubly curved) or "loft" (the body-fitted 3D garment itself is stress free)
     rest: str = "loft"
+    #: kind = "pattern": the sewing pattern (fenics_garment.pattern: our .toml/.json, a
+    #: GarmentCode .json, a DXF-AAMA .dxf with a companion .toml of seams), relative to the
+    #: scene file; its flat pieces are the stress-free state and its sizes the fit (no ease)
+    pattern: str = ""
 
 
 @dataclass(frozen=True)
@@ -264,9 +268,9 @@ class Scene:
 
 
 BODY_KINDS = ("mannequin", "scan", "cylinder", "arm")
-GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve")
+GARMENT_KINDS = ("gilet", "dress", "tube", "stocking", "sleeve", "pattern")
 #: The body kind each garment kind needs (the rest need a mannequin or a scan).
-GARMENT_BODY = {"tube": ("cylinder",), "sleeve": ("arm", "scan")}
+GARMENT_BODY = {"tube": ("cylinder",), "sleeve": ("arm", "scan"), "pattern": BODY_KINDS}
 #: Levels that a per-level ease may name, per garment kind (others are not checked).
 _TORSO = ("hip", "abdomen", "waist", "underbust", "bust", "upper_chest", "shoulder", "neck_base",
           "neck")  # fmt: skip
@@ -323,6 +327,18 @@ LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
 }  # fmt: skip
 #: of the keys above, those where 0 selects a default rule (accepted besides the range)
 ZERO_MEANS_DEFAULT = ("physics.penalty_length",)
+
+
+def scene_file(scene: Scene, name: str) -> Path:
+    """A file named in ``scene`` (a scan, a pattern): relative to the scene file's folder
+    (the folder of the file a linked scene file points to, if not found next to the link:
+    ``demos/`` links the package's scenes)."""
+    path = Path(name)
+    if not path.is_absolute() and scene.source:
+        here = Path(scene.source).parent / path
+        there = Path(scene.source).resolve().parent / path
+        path = here if here.exists() or not there.exists() else there
+    return path
 
 
 def load_terms(spec: str, source: str = "") -> Callable[[Any], None] | None:
@@ -546,6 +562,14 @@ def _check(s: Scene) -> None:
     if g.kind == "stocking":
         _require(b.kind != "mannequin" or b.legs or b.human, src, "body.legs",
                  "a stocking on a mannequin needs legs = true")  # fmt: skip
+    if g.kind == "pattern":
+        _require(bool(g.pattern), src, "garment.pattern", "a pattern garment needs a pattern "
+                 "file (our .toml/.json, GarmentCode .json or DXF-AAMA .dxf)")  # fmt: skip
+        _require(g.ease == {}, src, "garment.ease", "a pattern garment's fit is in its "
+                 "pattern's sizes: no ease")  # fmt: skip
+    else:
+        _require(not g.pattern, src, "garment.pattern",
+                 f"is for kind = 'pattern' (this garment is a built-in {g.kind})")  # fmt: skip
     if isinstance(g.ease, dict) and g.kind in EASE_LEVELS:
         for k in g.ease:
             if k not in EASE_LEVELS[g.kind]:
@@ -561,8 +585,8 @@ def _check(s: Scene) -> None:
     _require(g.edge_band > 0, src, "garment.edge_band", f"must be positive [m], got {g.edge_band}")
     from fenics_garment.geometry.garments import EDGE_NAMES, EdgeRefinement
 
-    names = EDGE_NAMES[g.kind]
-    for e in g.refine_edges:
+    names = EDGE_NAMES.get(g.kind, ())  # a pattern's edges are named in its file
+    for e in g.refine_edges if names else ():
         ok = any(map(EdgeRefinement((e,)).selects, names))
         _require(ok, src, "garment.refine_edges",
                  f"a {g.kind} has no edge {e!r}; its edges: {', '.join(names)} (or a prefix, "

@@ -108,6 +108,8 @@ def scene_limits(scene) -> None:
         mannequin_limits(scene)
     if b.kind == "scan":
         scan_file(scene, fail)
+    if g.kind == "pattern":
+        pattern_file(scene, fail)
     area = BODY_AREA
     if b.kind == "cylinder":
         lo, hi = LENGTH_RANGE
@@ -164,12 +166,30 @@ def reg_limits(scene, fail: Callable[[str, str], None]) -> None:
 
 def scan_file(scene, fail: Callable[[str, str], None]) -> None:
     """The scan file exists (checked on every rank: only rank 0 reads it)."""
-    path = Path(scene.body.file)
-    if not path.is_absolute() and scene.source:
-        path = Path(scene.source).parent / path
+    _file_exists(scene, "body.file", scene.body.file, fail)
+
+
+def pattern_file(scene, fail: Callable[[str, str], None]) -> None:
+    """The pattern file exists and reads as a valid pattern (a malformed one is refused here,
+    before any meshing, with the reader's one line naming the panel and edge)."""
+    from fenics_garment.pattern.io import read_pattern
+    from fenics_garment.pattern.model import PatternError
+
+    path = _file_exists(scene, "garment.pattern", scene.garment.pattern, fail)
+    try:
+        read_pattern(path)
+    except PatternError as err:
+        fail("garment.pattern", f"= {scene.garment.pattern!r}: {err}")
+
+
+def _file_exists(scene, key: str, name: str, fail: Callable[[str, str], None]) -> Path:
+    from fenics_garment.scene.config import scene_file
+
+    path = scene_file(scene, name)
     if not path.is_file():
-        fail("body.file", f"= {scene.body.file!r}: no such file {path} (a relative path is "
-             "relative to the scene file's folder)")  # fmt: skip
+        fail(key, f"= {name!r}: no such file {path} (a relative path is relative to the scene "
+             "file's folder)")  # fmt: skip
+    return path
 
 
 def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
@@ -225,6 +245,8 @@ def smallest_body_radius(built) -> tuple[float, str]:
     sc = built.scene
     if sc.body.kind == "cylinder":
         return sc.body.radius, "cylinder"
+    if not built.garment.levels:  # a pattern garment that goes round no landmark level
+        return math.inf, "no level"
     level = min(built.garment.levels, key=lambda lv: lv.body_girth)
     return level.body_girth / (2 * math.pi), f"level {level.name!r}"
 
