@@ -32,9 +32,12 @@ from fenics_garment.contact.state import ContactState
 
 
 def area_stretch(kin) -> ufl.core.expr.Expr:
-    """J_s = da/dA = |F e₁ × F e₂| (e₁, e₂ the orthonormal reference frame of the shell)."""
+    """J_s = da/dA = |F e₁ × F e₂| per unit mesh area (e₁, e₂ the orthonormal reference frame
+    of the shell; for flat pattern pieces, whose frame is orthonormal in the flat metric,
+    × dA_rest/dA_mesh: the contact points' weights are mesh areas)."""
     c = ufl.cross(kin.F * kin.e1, kin.F * kin.e2)
-    return ufl.sqrt(ufl.dot(c, c))
+    J = ufl.sqrt(ufl.dot(c, c))
+    return J if kin.rest_area is None else J * kin.rest_area
 
 
 @dataclass

@@ -667,7 +667,9 @@ def describe(pattern: Pattern) -> list[str]:
         g = np.degrees(np.arctan2(p.grain[1], p.grain[0]))
         lines.append(f"  panel {p.name}: {w:.0f} × {h:.0f} mm, {p.area * 1e4:.1f} dm², grain "
                      f"{g:.0f}°, fabric {p.fabric or '(the scene’s)'}")  # fmt: skip
-        edges = ", ".join(f"{i}:{e.name or '-'} {e.length * 1e3:.1f}" for i, e in enumerate(p.edges))
+        edges = ", ".join(
+            f"{i}:{e.name or '-'} {e.length * 1e3:.1f}" for i, e in enumerate(p.edges)
+        )
         lines.append(f"    edges [mm]: {edges}")
     for i, s in enumerate(pattern.seams):
         la, lb = pattern.range_length(s.a), pattern.range_length(s.b)

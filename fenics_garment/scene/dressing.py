@@ -413,8 +413,8 @@ def dress(
     if pr.stage == "grow" and rest is not None and pr.sewn < 1.0:
         pr.stage = "sew"
     if pr.stage == "sew":  # on the body: contact holds the garment while its seams pull
-        if mu is not None:
-            mu.value = pr.mu
+        # (friction as while the body grew: without friction_while_growing it comes on after
+        # the sewing, where the slip is zero, and the garment settles frictionless first)
         _sew(pr, built, solver, max_cuts, on_step, on_failure, on_checkpoint)
         pr.stage = "grow"
     if pr.stage == "grow":

@@ -190,6 +190,9 @@ class ShellKinematics:
     bending: ufl.core.expr.Expr  # 2×2 curvature change κ
     shear: ufl.core.expr.Expr  # 2-vector transverse shear strain γ
     drilling: ufl.core.expr.Expr  # scalar drilling strain δ
+    #: dA_rest/dA_mesh when the frame (e₁, e₂) is that of flat pattern pieces (the strains
+    #: are then per unit rest area; an area per mesh area is multiplied by it), else None
+    rest_area: ufl.core.expr.Expr | None = None
 
 
 def shell_kinematics(
@@ -241,4 +244,5 @@ def shell_kinematics(
     gam = ufl.as_vector([ufl.dot(Fe[a], d) - ufl.dot(e[a], d0) for a in range(2)])
     drill = 0.5 * (ufl.dot(rotate(theta, e1), Fe[1]) - ufl.dot(rotate(theta, e2), Fe[0]))
     return ShellKinematics(F=F, R=rotation_matrix(theta), d=d, e1=e1, e2=e2, membrane=eps,
-                           bending=kap, shear=gam, drilling=drill)  # fmt: skip
+                           bending=kap, shear=gam, drilling=drill,
+                           rest_area=geometry.rest_area)  # fmt: skip
