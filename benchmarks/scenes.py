@@ -136,6 +136,8 @@ def child(spec: dict) -> dict:
             s = replace(s, body=replace(s.body, human=True))
         if part.startswith("linear-"):  # linear-NAME: the scene's [solver] linear = NAME
             s = replace(s, solver=replace(s.solver, linear=part[len("linear-") :]))
+        if part.startswith("rest-"):  # rest-pattern / rest-loft: the garment's rest state
+            g = replace(g, rest=part[len("rest-") :])
         if part.startswith("armhole-"):  # armhole-R: cells of R × h along the armholes
             g = replace(g, refine_edges=["armhole"], edge_ratio=float(part[len("armhole-") :]))
         if part.startswith("body-"):  # body-X: body triangles of X m instead of the scene's

@@ -185,9 +185,10 @@ def _check(scene) -> int:
         g = built.garment
         if g.rest is not None:
             i = g.info
-            print(f"sewn: seam gap before merging {i.get('seam_gap_max', 0) * 1e3:.1f} mm, "
-                  f"edge strain against the flat pieces {i.get('strain_rms', 0):.2%} RMS, "
-                  f"{i.get('strain_max', 0):.1%} max, {i.get('inverted', 0)} folded cells")  # fmt: skip
+            gap, rms, top = i.get("seam_gap_max", 0), i.get("strain_rms", 0), i.get("strain_max", 0)
+            print(f"sewn: seam gap before merging {gap * 1e3:.1f} mm, edge strain against the "
+                  f"flat pieces {rms:.2%} RMS, {top:.1%} max, {i.get('inverted', 0):.0f} folded "
+                  "cells")  # fmt: skip
         if g.levels:
             print("fit (level: body girth → garment girth, ease):  " + ";  ".join(
                 f"{lv.name} {lv.body_girth * 100:.1f} → {lv.garment_girth * 100:.1f} cm "

@@ -11,6 +11,7 @@ import io
 import json
 import os
 from collections.abc import Callable
+from typing import Any
 from pathlib import Path
 
 import numpy as np
@@ -351,3 +352,74 @@ def garment_node_values(garment, f) -> Array:
     out = comm.allreduce(out * seen[:, None], op=MPI.SUM)
     seen = comm.allreduce(seen, op=MPI.SUM)
     return out / np.maximum(seen, 1.0)[:, None]
+
+
+def pattern_pieces(cell_nodes: npt.NDArray[np.int64], cell_flat: Array) -> npt.NDArray[np.int64]:
+    """The pattern piece of each cell: cells joined where they share an edge with the same
+    flat coordinates on both sides (a seam or a dart separates pieces: its two sides have
+    their own flat coordinates). Numbered 0… in order of first cell."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    tri = np.asarray(cell_nodes)[:, :3]
+    uv = np.asarray(cell_flat)[:, :3]
+    m = len(tri)
+    rows, cols = [], []
+    keys: dict[tuple[int, int], list[tuple[int, int, int]]] = {}
+    for c in range(m):
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            i, j = int(tri[c, a]), int(tri[c, b])
+            la, lb = (a, b) if i < j else (b, a)
+            keys.setdefault((min(i, j), max(i, j)), []).append((c, la, lb))
+    for sides in keys.values():
+        if len(sides) != 2:
+            continue
+        (c1, a1, b1), (c2, a2, b2) = sides
+        if np.allclose(uv[c1, a1], uv[c2, a2], atol=1e-9) and np.allclose(
+            uv[c1, b1], uv[c2, b2], atol=1e-9
+        ):
+            rows.append(c1)
+            cols.append(c2)
+    graph = coo_matrix((np.ones(len(rows)), (rows, cols)), shape=(m, m))
+    return connected_components(graph, directed=False)[1]
+
+
+def pattern_png(
+    path: Path, rest: Any, p_vertex: Array, title: str, *, vmax_kpa: float | None = None
+) -> Path:
+    """The flat pattern pieces side by side, coloured by the contact pressure where each piece
+    presses on the body (``rest``: the garment's :class:`~fenics_garment.shell.rest.FlatCells`;
+    ``p_vertex``: pressure [Pa] per garment vertex, gmsh order)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    from matplotlib.cm import ScalarMappable
+    from matplotlib.collections import PolyCollection
+    from matplotlib.colors import Normalize
+
+    tri = np.asarray(rest.cell_nodes)[:, :3]
+    uv = np.asarray(rest.cell_flat)[:, :3].copy()
+    piece = pattern_pieces(rest.cell_nodes, rest.cell_flat)
+    gap, x0 = 0.05, 0.0
+    for k in range(piece.max() + 1):  # lay the pieces out left to right, bottoms aligned
+        sel = piece == k
+        lo = uv[sel].reshape(-1, 2).min(axis=0)
+        hi = uv[sel].reshape(-1, 2).max(axis=0)
+        uv[sel] += np.array([x0 - lo[0], -lo[1]])
+        x0 += hi[0] - lo[0] + gap
+    p_kpa = units.pa_to_kpa(np.asarray(p_vertex, dtype=float))
+    top = vmax_kpa or max(float(p_kpa.max()), 1e-6)
+    norm = Normalize(0.0, top)
+    cmap = plt.get_cmap("viridis")
+    fig, ax = plt.subplots(figsize=(max(6.0, 9.0 * x0 / 1.2), 5.0))
+    ax.add_collection(PolyCollection(uv, facecolors=cmap(norm(p_kpa[tri].mean(axis=1))),
+                                     edgecolors="none"))  # fmt: skip
+    ax.autoscale()
+    ax.set_aspect("equal")
+    ax.set_xlabel("flat pattern pieces (warp along x) [m]")
+    ax.set_title(f"{title}: pressure on the pattern")
+    fig.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8, label="contact pressure [kPa]")
+    fig.savefig(path, dpi=110, bbox_inches="tight")
+    plt.close(fig)
+    return Path(path)

@@ -665,7 +665,7 @@ def describe(pattern: Pattern) -> list[str]:
         pts = p.outline(0.005)
         w, h = np.ptp(pts, axis=0) * 1e3
         g = np.degrees(np.arctan2(p.grain[1], p.grain[0]))
-        lines.append(f"  panel {p.name}: {w:.0f} × {h:.0f} mm, {p.area * 1e4:.1f} dm², grain "
+        lines.append(f"  panel {p.name}: {w:.0f} × {h:.0f} mm, {p.area * 1e2:.2f} dm², grain "
                      f"{g:.0f}°, fabric {p.fabric or '(the scene’s)'}")  # fmt: skip
         edges = ", ".join(
             f"{i}:{e.name or '-'} {e.length * 1e3:.1f}" for i, e in enumerate(p.edges)

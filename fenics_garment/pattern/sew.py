@@ -603,11 +603,40 @@ def pattern_garment(
     return surface, rest
 
 
+def flat_girth(garment: Any, z: float) -> float:
+    """The length in the flat pattern pieces of the garment's section at height ``z``: each
+    cell's crossing segment (P1 vertices) measured between the flat positions of its two
+    crossing points. The girth the pattern provides along that line (the placed mesh's own
+    section may be longer: the wrap stands off where the body narrows)."""
+    tri = np.asarray(garment.cells)
+    cn = np.asarray(garment.rest.cell_nodes)[:, :3]
+    if not np.array_equal(np.sort(cn, axis=1), np.sort(tri, axis=1)):
+        raise ValueError("the flat pieces' cells are not the garment's cells")
+    x = garment.points
+    zz = x[tri, 2] - z
+    zz[zz == 0.0] = 1e-15
+    flat = np.asarray(garment.rest.cell_flat)[:, :3]
+    # the flat coordinate of each of the cell's vertices, in the order of ``tri``
+    pos = np.argmax(tri[:, :, None] == cn[:, None, :], axis=2)
+    uv = np.take_along_axis(flat, pos[:, :, None], axis=1)
+    total = 0.0
+    above = zz > 0
+    cut = above.any(axis=1) & ~above.all(axis=1)
+    for c in np.flatnonzero(cut):
+        pts = []
+        for a, b in ((0, 1), (1, 2), (2, 0)):
+            if above[c, a] != above[c, b]:
+                t = zz[c, a] / (zz[c, a] - zz[c, b])
+                pts.append(uv[c, a] + t * (uv[c, b] - uv[c, a]))
+        total += float(np.linalg.norm(pts[1] - pts[0]))
+    return total
+
+
 def fit_levels(garment: Any, body: Any) -> list[Any]:
     """The fit of a sewn pattern, as the built-in garments' construction table: at each body
-    landmark level the garment crosses all round (a closed section), the body's tape girth,
-    the placed garment's girth, their ratio − 1 as the ease, and the clearance (girth
-    difference / 2π). Measured on the sewn mesh before dressing: the pattern's own sizing."""
+    landmark level the garment goes all round (closed sections), the body's tape girth, the
+    pattern's girth along that level (:func:`flat_girth`), their ratio − 1 as the ease and
+    the clearance (girth difference / 2π): the pattern's own sizing on this body."""
     from fenics_garment.geometry import sections as sec
     from fenics_garment.geometry.errors import MissingRegion
     from fenics_garment.geometry.garments import GarmentLevel
@@ -625,7 +654,7 @@ def fit_levels(garment: Any, body: Any) -> list[Any]:
             g_body = body.girth(name)
         except (MissingRegion, ValueError):
             continue
-        g = sum(sec.perimeter(p, closed=True) for p, _ in chains)
+        g = flat_girth(garment, zl)
         rows.append(GarmentLevel(name, float(zl), g_body, g / g_body - 1.0, g,
                                  (g - g_body) / (2 * np.pi)))  # fmt: skip
     return rows

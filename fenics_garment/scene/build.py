@@ -274,6 +274,7 @@ def rest_map(scene: Scene, garment: gm.GarmentSurface) -> dolfinx.fem.Function |
         raise GeometryError(f"the {garment.kind}'s pattern pieces fold over when flattened "
                             f"(flipped triangles per panel: {bad})")  # fmt: skip
     garment.info["pattern"] = {k: (f.rms_strain, f.max_strain) for k, f in flat.panels.items()}
+    garment.rest = flat.cells  # the garment is now made of these flat pieces
     return Y
 
 

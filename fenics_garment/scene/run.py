@@ -18,7 +18,8 @@ One output folder per run, ``<output.folder>/<name>/``:
   per-region statistics use the garment-side pressure at the contact points (``output``);
 * ``summary.json`` and ``pressure_regions.csv`` — per-region pressure (kPa, mmHg, comfort band),
   contact area, penetration, strain, steps, Newton iterations, time split, dofs, ranks;
-* ``pressure_garment.png``, ``pressure_body.png`` — front and back pressure maps.
+* ``pressure_garment.png``, ``pressure_body.png`` — front and back pressure maps;
+  ``pressure_pattern.png`` — the pressure on the flat pattern pieces (a garment sewn from them).
 """
 
 from __future__ import annotations
@@ -832,6 +833,9 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
                         under=(b.vertices, b.triangles), vmax_kpa=top)  # fmt: skip
     output.pressure_png(folder / "pressure_body.png", b.vertices, b.triangles, p_body,
                         "body", vmax_kpa=top)  # fmt: skip
+    if built.garment.rest is not None:  # sewn from flat pieces: the pressure on the pattern
+        output.pattern_png(folder / "pressure_pattern.png", built.garment.rest, p,
+                           f"{built.scene.garment.fabric} {built.scene.name}", vmax_kpa=top)  # fmt: skip
 
 
 def _print_regions(say, regions: list[dict]) -> None:
