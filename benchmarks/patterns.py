@@ -96,10 +96,13 @@ def _pct(a: float | None, b: float | None) -> str:
 
 def markdown(data: dict | None = None) -> str:
     data = _load() if data is None else data
-    out = ["Flat pattern pieces against the body-fitted loft as the garment's stress-free state "
-           "(`python -m benchmarks.patterns compare`): the same body, ease, mesh and dressing "
-           "path; the pattern is the loft flattened (ARAP) into princess-seamed pieces. Per key "
-           "region: sensor p95 [kPa], mean [kPa] and contact force [N], loft → pattern.", ""]  # fmt: skip
+    out = [
+        "Flat pattern pieces against the body-fitted loft as the garment's stress-free state "
+        "(`python -m benchmarks.patterns compare`): the same body, ease, mesh and dressing "
+        "path; the pattern is the loft flattened (ARAP) into princess-seamed pieces. Per key "
+        "region: sensor p95 [kPa], mean [kPa] and contact force [N], loft → pattern.",
+        "",
+    ]
     for stem, v in data.get("compare", {}).items():
         runs = {r.get("rest"): r for r in v["runs"] if r.get("status") == "ok"}
         if set(runs) != {"loft", "pattern"}:

@@ -834,8 +834,9 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
     output.pressure_png(folder / "pressure_body.png", b.vertices, b.triangles, p_body,
                         "body", vmax_kpa=top)  # fmt: skip
     if built.garment.rest is not None:  # sewn from flat pieces: the pressure on the pattern
-        output.pattern_png(folder / "pressure_pattern.png", built.garment.rest, p,
-                           f"{built.scene.garment.fabric} {built.scene.name}", vmax_kpa=top)  # fmt: skip
+        title = f"{built.scene.garment.fabric} {built.scene.name}"
+        output.pattern_png(folder / "pressure_pattern.png", built.garment.rest, p, title,
+                           vmax_kpa=top)  # fmt: skip
 
 
 def _print_regions(say, regions: list[dict]) -> None:
