@@ -185,6 +185,12 @@ REGISTRY: dict[str, Demo] = {
         "a cotton one-piece dress, skirt hanging under gravity (seed paper figs 14-15)",
         _scene_demo("cotton_dress.toml"),
     ),
+    "darted-top": Demo(
+        "darted-top",
+        "a top sewn from its flat pattern file (front with two darts, back): the user's own "
+        "pattern",
+        _scene_demo("darted_top.toml"),
+    ),
     "tube-on-cylinder": Demo(
         "tube-on-cylinder",
         "a tight sleeve on a cylinder: the scene runner against Laplace's law (seconds)",

@@ -306,12 +306,14 @@ def test_garmentcode_closed_forms(tmp_path):
     # its sides, which run the other way round: inwards too
     assert signed_area(back) == pytest.approx(0.24 + seg - 2 * inward, rel=1e-5)
     # the clockwise back was mirrored x ↦ −x, its rotation turned about y: same 3D points,
-    # outline counter-clockwise, local +z out of the body (−z for a back panel)
-    assert np.allclose(back.placement.rotation @ [0, 0, 1], [0, 0, -1])
-    assert np.allclose(front.placement.rotation @ [0, 0, 1], [0, 0, 1])
+    # outline counter-clockwise, local +z out of the body (GarmentCode's −z for a back panel,
+    # +y in our frame: z up, the body facing −y)
+    assert np.allclose(back.placement.rotation @ [0, 0, 1], [0, 1, 0])
+    assert np.allclose(front.placement.rotation @ [0, 0, 1], [0, -1, 0])
     corners = back.placement.apply(np.array([e.curve.start for e in back.edges]))
+    # GarmentCode's (x, y, z) = (−0.2, 0.8, −0.2) … is our (x, −z, y)
     assert np.allclose(
-        corners, [[-0.2, 0.8, -0.2], [-0.2, 1.4, -0.2], [0.2, 1.4, -0.2], [0.2, 0.8, -0.2]]
+        corners, [[-0.2, 0.2, 0.8], [-0.2, 0.2, 1.4], [0.2, 0.2, 1.4], [0.2, 0.2, 0.8]]
     )
     assert np.allclose(back.grain, [0, 1]) and np.allclose(front.grain, [0, 1])
     assert [e.name for e in front.edges] == ["hem", "", "", ""]

@@ -54,6 +54,10 @@ Nothing of it is copied::
   keeps them running the same way (``reversed = False``). A stitch within one panel is a
   ``"dart"``. Gathered edges (a ruffle sewn to a shorter edge) are refused by the seam-length
   check unless ``seam_tolerance`` is raised.
+* **Frame**: GarmentCode's body stands y up and faces +z (its left at +x); ours stands z up
+  and faces −y: placements are turned by :data:`GC_TO_OURS`. A panel laid along a limb
+  (grain more than :data:`MAX_WRAP_TILT_DEG` from vertical: a sleeve) is not wrapped around
+  the torso (``Wrap(axis="none")``); the sewing closes it round the arm.
 * Edge ``label`` becomes the edge's name; seams get generated names (``seam_<k>``, k the
   stitch's index in the file).
 """
@@ -61,6 +65,7 @@ Nothing of it is copied::
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -76,6 +81,7 @@ from .model import (
     PatternError,
     Placement,
     Seam,
+    Wrap,
     arc_from_radius,
     rotation_xyz,
     transform_curve,
@@ -232,7 +238,27 @@ def pattern_from_spec(
     # validate as written (clockwise allowed), then mirror the clockwise panels
     validate(raw, seam_tolerance=seam_tolerance, allow_clockwise=True)
     mirrored = {n: _mirrored(p) if signed_area(p) < 0 else p for n, p in panels.items()}
-    return Pattern(name, mirrored, seams, source)
+    return Pattern(name, {n: _to_our_frame(p) for n, p in mirrored.items()}, seams, source)
+
+
+#: GarmentCode's body frame (y up, facing +z, its left at +x: SMPL's) to ours (z up, facing −y,
+#: its left at +x): a quarter turn about x, (x, y, z) ↦ (x, −z, y)
+GC_TO_OURS = np.array([[1.0, 0.0, 0.0], [0.0, 0.0, -1.0], [0.0, 1.0, 0.0]])
+#: a placed panel whose grain (local +y, GarmentCode's vertical) leans more than this from
+#: the vertical (a sleeve along an arm) is not wrapped around the torso: it stays as placed
+#: and the sewing closes it round its limb
+MAX_WRAP_TILT_DEG = 30.0
+
+
+def _to_our_frame(panel: Panel) -> Panel:
+    pl = panel.placement
+    if pl is None:
+        return panel
+    placement = Placement(GC_TO_OURS @ pl.translation, GC_TO_OURS @ pl.rotation)
+    up = placement.rotation @ np.array([0.0, 1.0, 0.0])
+    tilt = np.degrees(np.arccos(np.clip(up[2], -1.0, 1.0)))
+    wrap = Wrap(axis="none") if tilt > MAX_WRAP_TILT_DEG else panel.wrap
+    return replace(panel, placement=placement, wrap=wrap)
 
 
 def read_garmentcode(path: str | Path, *, seam_tolerance: float = 0.02) -> Pattern:
