@@ -98,6 +98,15 @@ def test_sewn_rectangle_obeys_laplace():
     mid = [lv for lv in g.levels if lv.name == "mid"]
     assert mid and mid[0].ease == pytest.approx(EASE, abs=1e-3)
     assert mid[0].garment_girth == pytest.approx(2 * math.pi * r0, rel=1e-4)
+    # the flat pieces written back as a pattern (ours and DXF-AAMA + seams): the rectangle
+    from fenics_garment.pattern.io import read_pattern
+
+    if comm.rank == 0:
+        for name in ("pattern.toml", "pattern_seams.toml"):
+            back = read_pattern(res.folder / name)
+            (panel,) = back.panels.values()
+            assert panel.area == pytest.approx(2 * math.pi * r0 * L, rel=1e-3)
+            assert len(back.seams) == 1 and back.seams[0].name == "seam"
 
 
 def test_malformed_pattern_is_refused_in_one_line(capsys):

@@ -147,7 +147,8 @@ def flatten_cells(
         flat[cells] = uv[local]
     if np.isnan(flat).any():
         raise ValueError("flattening: some cells belong to no panel")
-    return PanelFlattening(FlatCells(np.asarray(cell_nodes, dtype=np.int64), flat), result)
+    cells = FlatCells(np.asarray(cell_nodes, dtype=np.int64), flat, np.asarray(cell_panel))
+    return PanelFlattening(cells, result)
 
 
 def garment_flat_map(garment, comm=None):

@@ -598,7 +598,7 @@ def pattern_garment(
                 raise GeometryError(f"DOLFINx refused the sewn mesh: {_first_line(e)}") from e
     info = {**data["info"], "seconds_total": time.perf_counter() - t0,
             "cells": float(len(data["cells6"]))}  # fmt: skip
-    rest = FlatCells(data["cells6"], data["cell_flat"])
+    rest = FlatCells(data["cells6"], data["cell_flat"], data["surface"]["cell_panel"])
     surface = GarmentSurface(levels=[], meshdata=meshdata, info=info, rest=rest, **data["surface"])
     return surface, rest
 

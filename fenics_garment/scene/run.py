@@ -19,7 +19,9 @@ One output folder per run, ``<output.folder>/<name>/``:
 * ``summary.json`` and ``pressure_regions.csv`` — per-region pressure (kPa, mmHg, comfort band),
   contact area, penetration, strain, steps, Newton iterations, time split, dofs, ranks;
 * ``pressure_garment.png``, ``pressure_body.png`` — front and back pressure maps;
-  ``pressure_pattern.png`` — the pressure on the flat pattern pieces (a garment sewn from them).
+  ``pressure_pattern.png`` — the pressure on the flat pattern pieces (a garment sewn from them),
+  and the pieces themselves as ``pattern.toml`` (our format) and ``pattern.dxf`` (DXF-AAMA,
+  seams in ``pattern_seams.toml``).
 """
 
 from __future__ import annotations
@@ -805,8 +807,26 @@ def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) ->
                                              "contact_pressure_lumped": f["p_lumped"]})  # fmt: skip
         if scene.output.pictures:
             _pictures(folder, built, (f["x_g"], f["p_g"]), f["p_body"])
+        if built.garment.rest is not None:
+            _write_pattern(folder, built)
 
     output.guarded(built.model.geometry.mesh.comm, write)
+
+
+def _write_pattern(folder: Path, built: scene_build.Built) -> None:
+    """The garment's flat pieces as a pattern: ``pattern.toml`` (our format) and
+    ``pattern.dxf`` (DXF-AAMA) with its seams in ``pattern_seams.toml``."""
+    from fenics_garment.pattern.dxf import write_dxf
+    from fenics_garment.pattern.export import garment_pattern
+    from fenics_garment.pattern.io import write_pattern
+
+    try:
+        pattern = garment_pattern(built.garment, built.scene.name)
+    except ValueError as err:  # (on rank 0 only: never raised past here, the others wait)
+        print(f"  WARNING: the flat pieces were not written as a pattern: {err}", flush=True)
+        return
+    write_pattern(pattern, folder / "pattern.toml")
+    write_dxf(pattern, folder / "pattern.dxf", companion=folder / "pattern_seams.toml")
 
 
 def garment_arrays(built) -> tuple[np.ndarray, np.ndarray]:

@@ -87,6 +87,8 @@ class FlatCells:
 
     cell_nodes: npt.NDArray[np.int64]
     cell_flat: npt.NDArray[np.float64]
+    #: the garment panel tag of each input cell (None: not known)
+    cell_panel: npt.NDArray[np.int32] | None = None
 
     def on_mesh(self, mesh: dolfinx.mesh.Mesh) -> np.ndarray:
         """(local cells incl. ghosts, nodes per cell, 2): the flat coordinates in the order of
