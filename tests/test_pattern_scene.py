@@ -119,3 +119,39 @@ def test_malformed_pattern_is_refused_in_one_line(capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and "tube" in err[0] and "lft" in err[0], err
+
+
+def test_garmentcode_pattern_is_placed_in_our_frame(tmp_path):
+    """A GarmentCode specification (y up, facing +z, cm) sewn round the mannequin (z up,
+    facing −y): its front panel ends up in front of the body (y < 0), its back behind, the
+    garment between the hip and the shoulders, not inside the body."""
+    import json
+
+    from fenics_garment.geometry import MeshSizes, make_mannequin, measurements
+    from fenics_garment.pattern.io import read_pattern
+    from fenics_garment.pattern.sew import pattern_garment
+
+    def panel(z: float, flip: bool) -> dict:
+        v = [[-25, 0], [25, 0], [23, 45], [-23, 45]]
+        if flip:  # GarmentCode draws a back panel clockwise as seen from the front
+            v = [[-x, y] for x, y in v]
+        return {"translation": [0, 95, z], "rotation": [0, 0, 0], "vertices": v,
+                "edges": [{"endpoints": [i, (i + 1) % 4]} for i in range(4)]}  # fmt: skip
+
+    spec = {"pattern": {"panels": {"front": panel(25, False), "back": panel(-20, True)},
+                        # the sides at the body's left (GarmentCode +x) and right (−x): the
+                        # back's outline is mirrored, so its +x side is its edge 3
+                        "stitches": [[{"panel": "front", "edge": 1}, {"panel": "back", "edge": 3}],
+                                     [{"panel": "front", "edge": 3},
+                                      {"panel": "back", "edge": 1}]]},
+            "properties": {"units_in_meter": 100}}  # fmt: skip
+    path = tmp_path / "top_specification.json"
+    path.write_text(json.dumps(spec))
+    body = make_mannequin(measurements("88"), MeshSizes(0.025, 0.025), z_range=(0.7, 1.55))
+    gm, _ = pattern_garment(read_pattern(path), body, 0.04)
+    x = gm.points
+    front = x[np.unique(gm.cells[gm.cell_panel == gm.panels["front"]])]
+    back = x[np.unique(gm.cells[gm.cell_panel == gm.panels["back"]])]
+    assert front[:, 1].mean() < -0.05 and back[:, 1].mean() > 0.05
+    assert 0.85 < x[:, 2].min() and x[:, 2].max() < 1.45  # GarmentCode's 95 … 140 cm
+    assert gm.info["penetration_max"] < 0.002 and gm.info["inverted"] == 0
