@@ -132,10 +132,23 @@ LEGACY_GROW_STEPS = 4
 
 def same_path(rec: dict, stem: str, variant: str) -> bool:
     """Whether ``rec`` was dressed along the path a run of ``stem`` with ``variant`` takes now:
-    the same schedule and number of grow steps (both change a frictional answer)."""
+    the same schedule and number of grow steps (both change a frictional answer), and the same
+    stress-free state of the garment (loft or flat pattern pieces)."""
     steps = scene_bench.grow_steps(variant, config_steps(stem))
     return (rec.get("schedule") == schedule_of(stem, variant)
-            and rec.get("grow_steps", LEGACY_GROW_STEPS) == steps)  # fmt: skip
+            and rec.get("grow_steps", LEGACY_GROW_STEPS) == steps
+            and rec.get("rest", "loft") == rest_of(stem, variant))  # fmt: skip
+
+
+def rest_of(stem: str, variant: str) -> str:
+    """The garment's stress-free state a run of ``stem`` with ``variant`` has (a record made
+    before it was recorded: "loft", the only one then)."""
+    from fenics_garment.scene import config
+
+    for part in variant.split("+"):
+        if part.startswith("rest-"):
+            return part[len("rest-") :]
+    return config.load(SCENES / f"{stem}.toml").garment.rest
 
 
 def config_steps(stem: str) -> int:

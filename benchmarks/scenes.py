@@ -225,6 +225,7 @@ def _record(res, spec: dict, comm) -> dict:
         "case": Path(spec.get("scene", GILET)).stem,
         "variant": spec.get("variant", "default"),
         "mesh_size": spec["mesh_size"],
+        "rest": sm.get("garment_rest", "loft"),  # the garment's stress-free state
         "cells": sm["garment_cells"],
         "dofs": sm["dofs"],
         "ranks": sm["ranks"],

@@ -18,9 +18,18 @@ def test_a_record_of_other_grow_steps_is_not_reused():
 def test_records_made_before_grow_steps_were_recorded_count_as_four():
     old = {"schedule": "fixed"}
     for stem in ("cotton_gilet", "cotton_dress"):
-        assert convergence.same_path(old, stem, "default") == (
+        assert convergence.same_path(old, stem, "rest-loft") == (
             convergence.config_steps(stem) == convergence.LEGACY_GROW_STEPS
         )
+
+
+def test_a_loft_record_is_not_reused_for_a_pattern_garment():
+    """Records made before the rest state was recorded are of lofts (the only one then): not
+    the answer of a garment made of flat pattern pieces."""
+    old = {"schedule": "fixed", "grow_steps": convergence.config_steps("cotton_dress")}
+    assert convergence.same_path(old, "cotton_dress", "default")  # shipped as a loft
+    assert not convergence.same_path(old, "cotton_dress", "rest-pattern")
+    assert convergence.same_path(old | {"rest": "pattern"}, "cotton_dress", "rest-pattern")
 
 
 def _noise_record(p95: float) -> dict:

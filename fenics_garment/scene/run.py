@@ -776,6 +776,9 @@ def _outputs(
         "max_membrane_strain": max_strain,
         "terms": built.terms(),  # the laws and terms of the problem solved
         "dressing": report.as_dict(),
+        # the garment's stress-free state: its loft, or flat pattern pieces (a pattern file's,
+        # or the loft's flattened: [garment] rest)
+        "garment_rest": "pattern" if built.model.geometry.rest is not None else "loft",
         "dressing_schedule": scene.dressing.schedule,  # the path (scene.dressing module doc)
         "dressing_steps": scene.dressing.steps,
         "dressing_path": scene.dressing.path(),
