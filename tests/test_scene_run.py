@@ -15,11 +15,10 @@ import numpy as np
 import pytest
 
 from fenics_garment._stack import MPI
-from fenics_garment.contact import pressure as cpressure
 from fenics_garment.scene import config, dressing
 from fenics_garment.scene import run as run_module
 from fenics_garment.scene.run import run
-from fenics_garment.verification.contact import tube_pressure
+from fenics_garment.verification.contact import band_pressure, tube_pressure
 
 SCENE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
 
@@ -43,14 +42,7 @@ def _scene(**solver) -> config.Scene:
 
 def _mid_pressure(result) -> float:
     """Force over deformed area of the contact points in the middle half of the tube."""
-    b = result.built
-    st, c = b.contact.state, b.contact
-    f = cpressure.point_forces(st, c.traction)
-    a = cpressure.point_areas(st, c.area_stretch())
-    z = cpressure.positions(st)[:, 2]
-    sel = np.abs(z - 0.1) < 0.05
-    comm = b.model.geometry.mesh.comm
-    return comm.allreduce(f[sel].sum(), op=MPI.SUM) / comm.allreduce(a[sel].sum(), op=MPI.SUM)
+    return band_pressure(result.built, 0.05, 0.15)
 
 
 def _laplace(result, stuck: bool = False) -> float:

@@ -46,7 +46,7 @@ from . import sections as sec
 from .body import BodySurface
 from .errors import GeometryError, MissingRegion
 from .garment_checks import check_garment
-from .gmsh_utils import GMSH_TIME_LIMIT, gmsh_session, time_limit, to_dolfinx
+from .gmsh_utils import GMSH_TIME_LIMIT, garment_mesh, gmsh_session, shared_result, time_limit
 from .limbs import Limb
 from .mannequin import add_loft
 
@@ -609,16 +609,10 @@ def _finish(
                 err = str(e)
             except Exception as e:  # gmsh raises a bare Exception with its last error
                 err = f"gmsh could not build the {kind}: {_first_line(e)}"
-        if comm is not None and comm.size > 1:
-            data, err = comm.bcast((data, err), root=0)
-        if err:
-            raise GeometryError(err)
+        data = shared_result(comm, data, err)
         meshdata = None
         if comm is not None:
-            try:
-                meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
-            except RuntimeError as e:  # e.g. "Duplicate mesh entity detected"
-                raise GeometryError(f"DOLFINx refused the {kind} mesh: {_first_line(e)}") from e
+            meshdata = garment_mesh(comm, g.model if g is not None else None, kind)
             if frame is not None:  # every node (edge nodes of a curved mesh too) onto the limb
                 x = meshdata.mesh.geometry.x
                 x[:] = frame.to_world(x)

@@ -51,6 +51,30 @@ def to_dolfinx(comm: Any, model: Any | None, rank: int = 0, gdim: int = 3) -> An
     return dgmsh.model_to_mesh(model, comm, rank, gdim=gdim)
 
 
+def shared_result(comm: Any | None, data: Any, err: str | None) -> Any:
+    """The gmsh rank's (data, error) on every rank of ``comm``; a GeometryError with the error
+    (on every rank, so none is left waiting) if building failed."""
+    from .errors import GeometryError
+
+    if comm is not None and comm.size > 1:
+        data, err = comm.bcast((data, err), root=0)
+    if err:
+        raise GeometryError(err)
+    return data
+
+
+def garment_mesh(comm: Any, model: Any | None, what: str) -> Any:
+    """:func:`to_dolfinx` of a garment; DOLFINx's refusal (e.g. "Duplicate mesh entity
+    detected") as a one-line GeometryError naming ``what``."""
+    from .errors import GeometryError
+
+    try:
+        return to_dolfinx(comm, model, 0)
+    except RuntimeError as e:
+        first = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise GeometryError(f"DOLFINx refused the {what} mesh: {first}") from e
+
+
 def add_discrete_surface(
     g: Any,
     vertices: Any,

@@ -563,7 +563,7 @@ def pattern_garment(
     """
     from fenics_garment.geometry.errors import GeometryError
     from fenics_garment.geometry.garments import GarmentSurface, _first_line
-    from fenics_garment.geometry.gmsh_utils import gmsh_session, to_dolfinx
+    from fenics_garment.geometry.gmsh_utils import garment_mesh, gmsh_session, shared_result
 
     from .mesh import mesh_panels, place
     from .model import PatternError
@@ -583,19 +583,13 @@ def pattern_garment(
             err = str(e)
         except Exception as e:  # gmsh raises a bare Exception with its last error
             err = f"could not sew the pattern {pattern.name!r}: {_first_line(e)}"
-    if comm is not None and comm.size > 1:
-        data, err = comm.bcast((data, err), root=0)
-    if err:
-        raise GeometryError(err)
+    data = shared_result(comm, data, err)
     meshdata = None
     if comm is not None:
         with gmsh_session(comm, 0, name=f"pattern_{pattern.name}") as g:
             if g is not None:
                 _discrete_model(g, data, order)
-            try:
-                meshdata = to_dolfinx(comm, g.model if g is not None else None, 0)
-            except RuntimeError as e:
-                raise GeometryError(f"DOLFINx refused the sewn mesh: {_first_line(e)}") from e
+            meshdata = garment_mesh(comm, g.model if g is not None else None, "sewn")
     info = {**data["info"], "seconds_total": time.perf_counter() - t0,
             "cells": float(len(data["cells6"]))}  # fmt: skip
     rest = FlatCells(data["cells6"], data["cell_flat"], data["surface"]["cell_panel"])

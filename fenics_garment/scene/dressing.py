@@ -390,12 +390,8 @@ def dress(
                 on_checkpoint(pr)
             continue
         # failed: restore the last converged state and halve the step
-        q.x.array[:] = q_conv
-        q.x.scatter_forward()
         st.shrink.value = s
-        st.refresh()
-        rep.failures.append((target, its, reason))
-        rep.failure_residuals.append(solver.residual_history().tolist())
+        _undo(q, q_conv, st, rep, solver, (target, its, reason))
         if on_failure:
             on_failure(target, its, reason)
         cuts += 1
@@ -481,6 +477,19 @@ def dress(
     return rep
 
 
+def _undo(
+    q, q_conv: np.ndarray, st, rep: DressReport, solver: NonlinearSolver, failure: tuple
+) -> None:
+    """A failed solve: the last converged state back (its parameter already reset by the
+    caller), the contact state refreshed, the failure (target, iterations, reason) and its
+    residual history recorded."""
+    q.x.array[:] = q_conv
+    q.x.scatter_forward()
+    st.refresh()
+    rep.failures.append(failure)
+    rep.failure_residuals.append(solver.residual_history().tolist())
+
+
 def _sew(
     pr: Progress, built, solver: NonlinearSolver, max_cuts: int, on_step, on_failure, on_checkpoint
 ) -> None:
@@ -519,12 +528,8 @@ def _sew(
             if on_checkpoint:
                 on_checkpoint(pr)
             continue
-        q.x.array[:] = q_conv
-        q.x.scatter_forward()
         rest.sewn.value = pr.sewn
-        st.refresh()
-        rep.failures.append((w, its, reason))
-        rep.failure_residuals.append(solver.residual_history().tolist())
+        _undo(q, q_conv, st, rep, solver, (w, its, reason))
         if on_failure:
             on_failure(w, its, reason, "sewn")
         cuts += 1

@@ -510,3 +510,15 @@ def tail_tensions(scene: ContactCase) -> tuple[float, float]:
         lam = np.linalg.norm(x[j] - x[i]) / np.linalg.norm(X[j] - X[i])
         out.append(lam * scene.extra["EA"] * (lam**2 - 1) / 2)
     return out[0], out[1]
+
+
+def band_pressure(built, z0: float, z1: float) -> float:
+    """Contact force over deformed area of a scene's contact points with z0 < z < z1 (all
+    ranks): a band of a tube away from its free ends, for Laplace's law."""
+    st, c = built.contact.state, built.contact
+    f = pressure.point_forces(st, c.traction)
+    a = pressure.point_areas(st, c.area_stretch())
+    z = pressure.positions(st)[:, 2]
+    sel = (z > z0) & (z < z1)
+    comm = built.model.geometry.mesh.comm
+    return comm.allreduce(f[sel].sum(), op=MPI.SUM) / comm.allreduce(a[sel].sum(), op=MPI.SUM)
