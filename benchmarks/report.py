@@ -153,6 +153,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [sweep_markdown(d), ""]
             continue
+        if name == "patterns":  # flat pattern pieces against the loft (benchmarks/patterns.py)
+            from benchmarks.patterns import markdown as patterns_markdown
+
+            parts += [patterns_markdown(d), ""]
+            continue
         if name == "mesh_noise":  # one scene on meshes of the same size (benchmarks/mesh_noise.py)
             from benchmarks.mesh_noise import markdown as noise_markdown
 
