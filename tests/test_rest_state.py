@@ -89,6 +89,7 @@ def test_disc_trend_with_a_over_R():
     assert errs[0.3] > errs[0.1]
 
 
+@pytest.mark.slow
 def test_mirrored_panel_gives_the_same_answer():
     """Y = (−x, y) is a left-handed flat map: the frame is flipped back, same forces."""
     from fenics_garment.verification import rest as vr
