@@ -399,7 +399,8 @@ def pattern_png(
     from matplotlib.colors import Normalize
 
     tri = np.asarray(rest.cell_nodes)[:, :3]
-    uv = np.asarray(rest.cell_flat)[:, :3].copy()
+    flat = np.asarray(rest.cell_flat)[:, :3]
+    uv = np.stack([-flat[..., 1], flat[..., 0]], axis=-1)  # the grain (warp, flat x) upright
     piece = pattern_pieces(rest.cell_nodes, rest.cell_flat)
     gap, x0 = 0.05, 0.0
     for k in range(piece.max() + 1):  # lay the pieces out left to right, bottoms aligned
@@ -412,12 +413,13 @@ def pattern_png(
     top = vmax_kpa or max(float(p_kpa.max()), 1e-6)
     norm = Normalize(0.0, top)
     cmap = plt.get_cmap("viridis")
-    fig, ax = plt.subplots(figsize=(max(6.0, 9.0 * x0 / 1.2), 5.0))
+    height = float(np.ptp(uv[..., 1]))
+    fig, ax = plt.subplots(figsize=(min(16.0, max(6.0, 5.0 * x0 / height)), 5.0))
     ax.add_collection(PolyCollection(uv, facecolors=cmap(norm(p_kpa[tri].mean(axis=1))),
                                      edgecolors="none"))  # fmt: skip
     ax.autoscale()
     ax.set_aspect("equal")
-    ax.set_xlabel("flat pattern pieces (warp along x) [m]")
+    ax.set_xlabel("flat pattern pieces, grain (warp) upright [m]")
     ax.set_title(f"{title}: pressure on the pattern")
     fig.colorbar(ScalarMappable(norm, cmap), ax=ax, shrink=0.8, label="contact pressure [kPa]")
     fig.savefig(path, dpi=110, bbox_inches="tight")

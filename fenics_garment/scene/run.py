@@ -857,7 +857,7 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
     output.pressure_png(folder / "pressure_body.png", b.vertices, b.triangles, p_body,
                         "body", vmax_kpa=top)  # fmt: skip
     if built.garment.rest is not None:  # sewn from flat pieces: the pressure on the pattern
-        title = f"{built.scene.garment.fabric} {built.scene.name}"
+        title = f"{built.scene.name} ({built.scene.garment.fabric})"
         output.pattern_png(folder / "pressure_pattern.png", built.garment.rest, p, title,
                            vmax_kpa=top)  # fmt: skip
 
