@@ -148,3 +148,20 @@ def test_garmentcode_pattern_is_placed_in_our_frame(tmp_path):
     assert front[:, 1].mean() < -0.05 and back[:, 1].mean() > 0.05
     assert 0.85 < x[:, 2].min() and x[:, 2].max() < 1.45  # GarmentCode's 95 … 140 cm
     assert gm.info["penetration_max"] < 0.002 and gm.info["inverted"] == 0
+
+
+def test_a_dxf_without_seams_is_refused_in_one_line(capsys, tmp_path):
+    """DXF-AAMA carries no seams: its pieces, dressed as they are, would fall off the body."""
+    from fenics_garment.cli import main
+    from fenics_garment.pattern.dxf import write_dxf
+    from fenics_garment.pattern.io import read_pattern
+
+    shipped = Path(__file__).parent.parent / "fenics_garment" / "scenes"
+    write_dxf(read_pattern(shipped / "patterns" / "darted_top.toml"), tmp_path / "top.dxf")
+    text = (shipped / "darted_top.toml").read_text()
+    scene = tmp_path / "scene.toml"
+    scene.write_text(text.replace("patterns/darted_top.toml", "top.dxf"))
+    code = main(["run", str(scene), "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "sewn to no other panel" in err[0] and "companion" in err[0], err

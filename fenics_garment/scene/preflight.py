@@ -177,9 +177,21 @@ def pattern_file(scene, fail: Callable[[str, str], None]) -> None:
 
     path = _file_exists(scene, "garment.pattern", scene.garment.pattern, fail)
     try:
-        read_pattern(path)
+        pattern = read_pattern(path)
     except PatternError as err:
         fail("garment.pattern", f"= {scene.garment.pattern!r}: {err}")
+        return
+    sewn = {r.panel for s in pattern.seams for r in (s.a, s.b) if s.a.panel != s.b.panel}
+    loose = [n for n in pattern.panels if n not in sewn]
+    if len(pattern.panels) > 1 and loose:
+        why = (
+            " (DXF-AAMA carries no seams: name them in a companion file of our format, "
+            "fenics_garment/pattern/io.py)"
+            if path.suffix.lower() == ".dxf"
+            else ""
+        )
+        fail("garment.pattern", f"= {scene.garment.pattern!r}: panel {loose[0]!r} is sewn to no "
+             f"other panel: it would fall off the body{why}")  # fmt: skip
 
 
 def _file_exists(scene, key: str, name: str, fail: Callable[[str, str], None]) -> Path:
