@@ -21,11 +21,12 @@ the first time the path reaches it (rising or, after a limit point, falling), an
 node) equals w*: the increment that crosses the target is *cut back* onto it — regula falsi
 (Illinois) on its arc length from the last point before the crossing, each trial a converged
 increment — and the state is then *pinned* on the target by a bordered Newton solve with the
-constraint λ = λ* (resp. e·q = w*), so that the last point is at the target to round-off
-(within 1e-10 × max(1, |target|) even where the pin cannot converge, e.g. at a limit point,
-or SolveFailed). ``reverse=True`` follows the path backwards from the current state (the
-direction opposite to the last increment, or decreasing λ on a fresh path): how to come back
-to a λ* that the path has passed. :class:`~fenics_garment.solve.LoadStepper` only raises λ and
+constraint λ = λ* (resp. e·q = w*): the last point has λ = λ* exactly (resp. e·q = w* to
+round-off), its residual converged like every point's (where the pin cannot converge, e.g. at
+a limit point, the regula falsi goes on to within 1e-10 × max(1, |target|), or SolveFailed).
+``reverse=True`` follows the path backwards from the current state (the direction opposite to
+the last increment, or decreasing λ on a fresh path): how to come back to a λ* that the path
+has passed. :class:`~fenics_garment.solve.LoadStepper` only raises λ and
 refuses a target below the current λ, naming this call.
 
 Both are solved by the *bordering* method: each Newton iteration factorises K once and solves it

@@ -35,9 +35,10 @@ female-maxcup  −0.47 / −0.06     −0.67 / −0.21     +0.31 / +17.68    −
 =============  ================  ================  ================  ==============
 
 The waist (+0.09, +0.20, +0.20 cm; 0.00–0.02 %) was right before and is unchanged. On the
-large cup, MakeHuman's own underbust measuring loop follows the crease under the breast, 3 cm
-higher; a horizontal tape there would also girth the hanging breast (0.88 m against 0.66 m), so
-the level "just below the breasts" of a horizontal tape is the reference here.
+large cup, MakeHuman's own underbust measuring loop (its measurement plugin) follows the crease
+under the breast, about 3 cm higher; a horizontal tape there would also girth the hanging breast
+(about 0.88 m against 0.66 m), so the level "just below the breasts" of a horizontal tape is the
+reference here.
 """
 
 from __future__ import annotations

@@ -146,8 +146,11 @@ def test_torso_girths_against_a_direct_measurement(scan):
         assert report["girths"][level] == pytest.approx(direct, rel=2e-3), level
     # above the armpits the section is clipped at the arm roots: no upper arm in the girth
     z = body.landmarks["upper_chest"]
-    direct = _direct_girth(body.vertices, body.triangles, z, body.arm_cut["left"])
-    # (1 %: the clipped section is closed along the cut planes, the cut points here stop short)
+    # (1 %: the clipped section is closed along the cut planes, the cut points here stop short
+    # of them by up to a facet, by an amount that jumps with z: 0.3–2.9 % under the clipped
+    # girth every 2 mm from 1.300 to 1.326 m; the largest within ±5 mm is the closest)
+    direct = max(_direct_girth(body.vertices, body.triangles, z + dz, body.arm_cut["left"])
+                 for dz in np.linspace(-0.005, 0.005, 6))  # fmt: skip
     assert report["girths"]["upper_chest"] == pytest.approx(direct, rel=1e-2)
     full = _direct_girth(body.vertices, body.triangles, z, 1.0)
     assert full > 1.2 * report["girths"]["upper_chest"]  # the arms would add over 20 %
@@ -282,7 +285,10 @@ def test_scan_gilet_scene_end_to_end(tmp_path):
     assert result.completed and result.report.final_regularisation == 0.0
     touched = {r["region"] for r in result.regions if r.get("mean_kPa", 0) > 0}
     assert touched and touched <= set(TORSO_REGIONS) | {"shoulders", "neck", "arms"}
-    assert {"bust", "shoulders"} <= touched
+    # it hangs from the shoulders; with the bust level at the bust points its +3 % clears the
+    # breasts (before, the bust level lay at the armpits and the loft from an under-bust 2 cm
+    # above the waist cut 1 cm into them: 118 cm² of contact there; now none)
+    assert {"shoulders", "upper_chest"} <= touched
 
 
 @pytest.mark.slow

@@ -296,8 +296,8 @@ ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 #: squared or as a divisor — κ = κ̂ E h / ℓ², c = c₀ E h / L², k = E / depth — refused on load
 #: outside them: far outside they overflow or divide by zero deep inside the build (1e300² = inf,
 #: 1 / 1e-300² = inf: an OverflowError, not a message), and well before that the run means
-#: nothing. Each range spans what a garment on a body can mean, with room to spare; a 0 that
-#: means "the default rule" (penalty_length, stick_stiffness) is accepted besides.
+#: nothing. Each range spans what a garment on a body can mean, with room to spare; the 0 of
+#: ``penalty_length`` ("the garment's largest cell") is accepted besides.
 #:
 #: * ``physics.penalty_length``, ``dressing.spring_length``: a length of the garment over which
 #:   its membrane stiffness E h is spread, from a fabric's thickness (0.1 mm) to 10 m (beyond
