@@ -9,6 +9,7 @@
 
 import math
 import tempfile
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -165,3 +166,27 @@ def test_a_dxf_without_seams_is_refused_in_one_line(capsys, tmp_path):
     err = capsys.readouterr().err.strip().splitlines()
     assert code == 2
     assert len(err) == 1 and "sewn to no other panel" in err[0] and "companion" in err[0], err
+
+
+@pytest.mark.slow
+def test_builtin_gilet_from_flat_pieces(tmp_path):
+    """The built-in gilet cut into princess-seamed flat pieces (rest = "pattern") dresses with
+    every result check passed, and its pieces, written as a pattern, are the flat map's: six
+    panels whose areas add up to the flat area ∫ j dA of the shell's rest state."""
+    import ufl
+
+    from fenics_garment.pattern.io import read_pattern
+
+    scene = config.load(Path(__file__).parent.parent / "demos" / "cotton_gilet.toml")
+    scene = replace(scene, garment=replace(scene.garment, mesh_size=0.04, rest="pattern"))
+    res = run(scene, _folder(MPI.COMM_WORLD) / "out", quiet=True)
+    assert res.completed and all(c.ok for c in res.checks), [c for c in res.checks if not c.ok]
+    m = res.built.model
+    flat_area = m.energy_value(m.geometry.rest_area * ufl.dx(m.geometry.mesh))
+    if MPI.COMM_WORLD.rank == 0:
+        p = read_pattern(res.folder / "pattern.toml")
+        assert set(p.panels) == {"front", "back", "front_side_left", "front_side_right",
+                                 "back_side_left", "back_side_right"}  # fmt: skip
+        assert sum(q.area for q in p.panels.values()) == pytest.approx(flat_area, rel=2e-3)
+        seams = {s.name.rstrip("_2") for s in p.seams}
+        assert {"side_seam_left", "shoulder_seam_right", "princess_front_left"} <= seams
