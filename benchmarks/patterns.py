@@ -80,13 +80,23 @@ def compare(stem: str, say) -> list[dict]:
 
 
 def sweep(stem: str, say, n: int | None = None) -> list[dict]:
+    """Dress ``stem`` on the sweep's meshes; a mesh already in the record (a run that ended,
+    stalled or not) is taken from it, so an interrupted sweep continues."""
+    import math
+
     coarse, fine, m = SWEEP[stem]
+    known = [r for r in _load().get("sweep", {}).get(stem, {}).get("runs", [])
+             if r.get("status") == "ok"]  # fmt: skip
     recs = []
     for h in sweep_bench.meshes(coarse, fine, n or m):
-        spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": h,
-                "variant": _variant(stem)}  # fmt: skip
-        r = dict(scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT), stem=stem)
-        say(sweep_bench.line(r))
+        same = [r for r in known if math.isclose(r["mesh_size"], h, rel_tol=1e-9)]
+        if same:
+            r = same[-1]
+        else:
+            spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": h,
+                    "variant": _variant(stem)}  # fmt: skip
+            r = dict(scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT), stem=stem)
+        say(sweep_bench.line(r) + ("  (from the record)" if same else ""))
         recs.append(r)
         _store("sweep", stem, recs)
     return recs
