@@ -139,27 +139,8 @@ def markdown(data: dict | None = None) -> str:
         out.append("")
     out += ["Dressing sweep of the pattern garments (`python -m benchmarks.patterns sweep`); a "
             "stall is a run that did not dress or kept its stabilising spring.", "",
-            "| garment | meshes | h [mm] | dofs | stalls | solves | Newton its | cuts | "
-            "max penetration / h | wall [s] |", "|---" * 10 + "|"]  # fmt: skip
-    for stem, v in data.get("sweep", {}).items():
-        runs = v["runs"]
-        ok = [r for r in runs if r.get("status") == "ok"]
-        if not ok:
-            out.append(f"| {stem} | {len(runs)} | | | {len(runs)} |" + " |" * 5)
-            continue
-        hs = [r["mesh_size"] * 1e3 for r in runs]
-
-        def span(key: str, ok: list[dict] = ok) -> str:
-            return f"{min(r[key] for r in ok)}–{max(r[key] for r in ok)}"
-
-        out.append(
-            f"| {stem} | {len(runs)} | {max(hs):.1f}–{min(hs):.1f} | "
-            f"{min(r['dofs'] for r in ok)}–{max(r['dofs'] for r in ok)} | "
-            f"{sum(sweep_bench.stalled(r) for r in runs)} | {span('solves')} | "
-            f"{span('newton_its')} | {span('failed_attempts')} | "
-            f"{max(r['max_penetration_over_thickness'] for r in ok):.2%} | "
-            f"{min(r['wall_s'] for r in ok):.0f}–{max(r['wall_s'] for r in ok):.0f} |"
-        )
+            *sweep_bench.TABLE_HEAD]  # fmt: skip
+    out += [sweep_bench.table_row(stem, v["runs"]) for stem, v in data.get("sweep", {}).items()]
     return "\n".join(out)
 
 

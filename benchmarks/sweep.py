@@ -118,36 +118,41 @@ def line(r: dict) -> str:
             f"{r['max_penetration_over_thickness']:.2%} h  {r['wall_s']:6.1f} s")  # fmt: skip
 
 
+TABLE_HEAD = [
+    "| scene | meshes | h [mm] | dofs | stalls | penetration > tolerance | solves | "
+    "Newton its | cuts | max penetration / h | wall [s] |",
+    "|---" * 11 + "|",
+]
+
+
+def table_row(stem: str, runs: list[dict]) -> str:
+    """One scene's sweep as a row of :data:`TABLE_HEAD`: spans over its runs, stalls counted."""
+    ok = [r for r in runs if r.get("status") == "ok"]
+    if not ok:
+        return f"| {stem} | {len(runs)} | | | {len(runs)} |" + " |" * 6
+    hs = [r["mesh_size"] * 1e3 for r in runs]
+
+    def span(key: str) -> str:
+        return f"{min(r[key] for r in ok)}–{max(r[key] for r in ok)}"
+
+    pen = max(r["max_penetration_over_thickness"] for r in ok)
+    return (f"| {stem} | {len(runs)} | {max(hs):.1f}–{min(hs):.1f} | "
+            f"{min(r['dofs'] for r in ok)}–{max(r['dofs'] for r in ok)} | "
+            f"{sum(stalled(r) for r in runs)} | {sum(above_tolerance(r) for r in runs)} | "
+            f"{span('solves')} | {span('newton_its')} | {span('failed_attempts')} | {pen:.2%} | "
+            f"{min(r['wall_s'] for r in ok):.0f}–{max(r['wall_s'] for r in ok):.0f} |")  # fmt: skip
+
+
 def markdown(data: dict | None = None) -> str:
     """Per scene: the runs of the sweep and the limbs' convergence levels, and the stalls."""
     data = _load(RESULTS) if data is None else data
     conv = _load(convergence.RESULTS / "convergence.json").get("scenes", {})
     out = ["Dressing sweep (`python -m benchmarks.sweep`): every garment mesh from the coarsest "
            "to the finest converged level; a stall is a run that did not dress or kept its "
-           "stabilising spring.", "",
-           "| scene | meshes | h [mm] | dofs | stalls | penetration > tolerance | solves | "
-           "Newton its | cuts | max penetration / h | wall [s] |", "|---" * 11 + "|"]  # fmt: skip
+           "stabilising spring.", "", *TABLE_HEAD]  # fmt: skip
     rows = [(s, v["runs"]) for s, v in data.get("scenes", {}).items()]
     rows += [(s, conv[s]["runs"]) for s in LEVELS_ONLY if s in conv]
-    for stem, runs in rows:
-        ok = [r for r in runs if r.get("status") == "ok"]
-        if not ok:
-            out.append(f"| {stem} | {len(runs)} | | | {len(runs)} |" + " |" * 6)
-            continue
-        hs = [r["mesh_size"] * 1e3 for r in runs]
-
-        def span(key: str, ok: list[dict] = ok) -> str:
-            return f"{min(r[key] for r in ok)}–{max(r[key] for r in ok)}"
-
-        pen = max(r["max_penetration_over_thickness"] for r in ok)
-        out.append(
-            f"| {stem} | {len(runs)} | {max(hs):.1f}–{min(hs):.1f} | "
-            f"{min(r['dofs'] for r in ok)}–{max(r['dofs'] for r in ok)} | "
-            f"{sum(stalled(r) for r in runs)} | {sum(above_tolerance(r) for r in runs)} | "
-            f"{span('solves')} | {span('newton_its')} | "
-            f"{span('failed_attempts')} | {pen:.2%} | "
-            f"{min(r['wall_s'] for r in ok):.0f}–{max(r['wall_s'] for r in ok):.0f} |"
-        )
+    out += [table_row(stem, runs) for stem, runs in rows]
     schedules = {r.get("schedule") for _, runs in rows for r in runs if r.get("status") == "ok"}
     out += ["", f"Dressing schedule of the runs: {', '.join(sorted(map(str, schedules)))}."]
     return "\n".join(out)
