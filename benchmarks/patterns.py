@@ -95,6 +95,9 @@ def sweep(stem: str, say, n: int | None = None) -> list[dict]:
         else:
             spec = {"scene": str(convergence.SCENES / f"{stem}.toml"), "mesh_size": h,
                     "variant": _variant(stem)}  # fmt: skip
+            if stem in convergence.PER_TURN:  # a limb's cells follow its curvature: refined
+                # in elements per turn with h, as in its convergence study
+                spec["per_turn"] = round(convergence.PER_TURN[stem] * coarse / h)
             r = dict(scene_bench.spawn(spec, timeout=scene_bench.LEVEL_TIMEOUT), stem=stem)
         say(sweep_bench.line(r) + ("  (from the record)" if same else ""))
         recs.append(r)
