@@ -222,20 +222,18 @@ def shell_kinematics(
     # rest metric and curvature: the mesh's own (a curved mesh is stress free), or those of
     # flat panels (metric δ in their frame, curvature 0), reached from the mesh's as the
     # sewing parameter w of the flat rest state goes from 0 to 1 (w = 1: the pattern)
-    if geometry.rest is None:
-        metric = [[1.0, 0.0], [0.0, 1.0]]
-        w_mesh = None
-    else:
-        w = geometry.rest.sewn
-        metric = [[w * (1.0 if a == b else 0.0) + (1 - w) * ufl.dot(e[a], e[b])
-                   for b in range(2)] for a in range(2)]  # fmt: skip
-        w_mesh = 1 - w
-    eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - metric[a][b])
-                          for b in range(2)] for a in range(2)])  # fmt: skip
+    w = None if geometry.rest is None else geometry.rest.sewn
+
+    def rest_metric(a: int, b: int) -> ufl.core.expr.Expr | float:
+        delta = 1.0 if a == b else 0.0
+        return delta if w is None else w * delta + (1 - w) * ufl.dot(e[a], e[b])
 
     def rest_curvature(a: int, b: int) -> ufl.core.expr.Expr:
         k = 0.5 * (ufl.dot(e[a], Pd0 * e[b]) + ufl.dot(e[b], Pd0 * e[a]))
-        return k if geometry.rest is None else w_mesh * k
+        return k if w is None else (1 - w) * k
+
+    eps = ufl.as_matrix([[0.5 * (ufl.dot(Fe[a], Fe[b]) - rest_metric(a, b))
+                          for b in range(2)] for a in range(2)])  # fmt: skip
 
     kap = ufl.as_matrix(
         [[0.5 * (ufl.dot(Fe[a], gde[b]) + ufl.dot(Fe[b], gde[a])) - rest_curvature(a, b)
