@@ -121,3 +121,26 @@ def test_a_point_that_has_just_touched_is_not_a_stall():
     gap = np.array([-2e-6, -8e-6, 1e-6])
     assert uzawa.persisting_penetration(state, gap, last) == pytest.approx(2e-6)
     assert uzawa.persisting_penetration(state, gap, None) == pytest.approx(8e-6)
+
+
+def test_the_loop_goes_on_past_its_count_while_it_contracts(point):
+    """Plain Uzawa at κ = 100 on K = 100 halves the penetration per update (ρ = K/(K + κ)):
+    from 0.5 m to 1e-3 m takes ⌈log2 500⌉ = 9 updates. Given 3, the loop goes on while each
+    update takes ≥ 10 % off (a converging run is not thrown away for a count) and converges."""
+    al = uzawa.augmented_lagrangian(
+        point, 100.0, lambda: (point.solve(100.0), (3, 2))[1], tol=1e-3, max_updates=3
+    )
+    assert al.converged
+    assert len(al.penetration) - 1 == 9
+    ratios = np.array(al.penetration[1:]) / np.array(al.penetration[:-1])
+    assert ratios == pytest.approx(0.5)
+
+
+def test_a_loop_that_stops_contracting_ends_at_its_count():
+    # within the count: always on; past it: on while the last update took ≥ 10 % off
+    assert uzawa._go_on([1.0, 0.95, 0.93], max_updates=3)
+    assert not uzawa._go_on([1.0, 0.95, 0.93, 0.92], max_updates=3)
+    assert uzawa._go_on([1.0, 0.5, 0.25, 0.12], max_updates=3)
+    # and never past EXTRA_UPDATES × the count
+    halving = [0.5**k for k in range(3 * uzawa.EXTRA_UPDATES + 1)]
+    assert not uzawa._go_on(halving, max_updates=3)

@@ -154,7 +154,7 @@ def augmented_lagrangian(
     # Only converged passes count as updates; a failed pass is put back and tried again at most
     # MAX_RECOVERIES times in all (each kind of recovery is itself bounded: one "plain step",
     # one "smaller raise" per raise, one "no raise").
-    while len(report.penetration) <= max_updates and len(report.recoveries) <= MAX_RECOVERIES:
+    while len(report.recoveries) <= MAX_RECOVERIES and _go_on(report.penetration, max_updates):
         its, reason = solve()
         report.newton_iterations.append(its)
         report.kappa.append(kappa)
@@ -162,7 +162,7 @@ def augmented_lagrangian(
             if last is None or unknown is None:
                 return report
             q, lam, kappa_ok, gap_ok, previous_ok = last
-            _put_back(state, unknown, stiffen, q, lam, kappa_ok)
+            put_back(state, unknown, stiffen, q, lam, kappa_ok)
             if kappa == kappa_ok:
                 if previous_ok is None or "plain step" in report.recoveries:
                     return report  # failed at a penalty that had converged: nothing left
@@ -209,6 +209,25 @@ def augmented_lagrangian(
     return report
 
 
+#: Past ``max_updates`` the loop goes on while each update still takes at least this fraction
+#: off the largest penetration (it is converging: a run is not thrown away for a count), up to
+#: :data:`EXTRA_UPDATES` × ``max_updates`` updates in all.
+CONTINUE_DECREASE, EXTRA_UPDATES = 0.1, 3
+
+
+def _go_on(penetration: list[float], max_updates: int) -> bool:
+    """Whether the loop makes another pass after the converged passes ``penetration``: within
+    ``max_updates`` updates always; beyond, while the last update contracted by at least
+    :data:`CONTINUE_DECREASE` (the scan dress on a heavier MakeHuman body stopped at 5.41 µm
+    against a 4.6 µm tolerance after its 3 updates while still contracting)."""
+    updates = len(penetration) - 1
+    if updates < max_updates:
+        return True
+    if updates >= EXTRA_UPDATES * max(max_updates, 1) or len(penetration) < 2:
+        return False
+    return penetration[-1] <= (1.0 - CONTINUE_DECREASE) * penetration[-2]
+
+
 def persisting_penetration(state: ContactState, gap: np.ndarray, last: np.ndarray | None) -> float:
     """max(−g) over the points that penetrated in the last pass too (all ranks) [m].
 
@@ -221,8 +240,9 @@ def persisting_penetration(state: ContactState, gap: np.ndarray, last: np.ndarra
     return state.mesh.comm.allreduce(local, op=MPI.MAX)
 
 
-def _put_back(state: ContactState, unknown, stiffen, q, lam, kappa: float) -> None:
-    """Restore a converged pass: the unknown, the multipliers and the penalty."""
+def put_back(state: ContactState, unknown, stiffen, q, lam, kappa: float) -> None:
+    """Restore a converged state: the unknown, the multipliers and the penalty (``stiffen``,
+    the penalty Constant, may be None)."""
     unknown.x.array[:] = q
     unknown.x.scatter_forward()
     state.lam.x.array[:] = lam

@@ -14,6 +14,9 @@ body. Each check compares an observable of the final state with an independent b
 * ``force_balance``: |applied load + body reaction| over the larger of the two (the body's normal
   and friction tractions summed as vectors, the weight λ ρh g A): at an equilibrium free of the
   spring the two cancel, since the internal forces do no work on a rigid translation;
+* ``multiplier_penetration``: with the augmented Lagrangian, the deepest penetration at the end
+  over the scene's tolerance (``[physics] tolerance`` × h), at most 1: a multiplier loop that
+  stopped short keeps its last converged state as the answer and fails this check;
 * ``contact_area``: the area in contact at the end over the area of the pattern that started
   inside the body (where it is tight, it must end up on the body; not applicable to a garment
   that is nowhere tight).
@@ -32,7 +35,13 @@ from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 
 #: The bound of each check (see the module doc).
-LIMITS = {"penetration": 1.0, "spring": 0.01, "force_balance": 0.02, "contact_area": 0.5}
+LIMITS = {
+    "penetration": 1.0,
+    "spring": 0.01,
+    "force_balance": 0.02,
+    "multiplier_penetration": 1.0,
+    "contact_area": 0.5,
+}
 #: Which side of the bound is good: the contact area ratio must be at least its limit.
 AT_LEAST = ("contact_area",)
 
@@ -116,6 +125,12 @@ def result_checks(
     scale = max(np.linalg.norm(applied), np.linalg.norm(reaction), measures["contact_force_N"])
     imbalance = _ratio(float(np.linalg.norm(applied + reaction)), scale)
     area = measures["contact_area_garment_m2"]
+    physics = built.scene.physics
+    al_tol = (
+        physics.tolerance * built.model.stiffness.thickness
+        if physics.contact == "augmented-lagrangian"
+        else 0.0
+    )
     return [
         Check("penetration", measures["max_penetration_m"] / thickness, LIMITS["penetration"],
               "deepest penetration into the body / fabric thickness"),
@@ -123,6 +138,10 @@ def result_checks(
               "stabilising spring traction / largest contact pressure"),
         Check("force_balance", imbalance, LIMITS["force_balance"],
               "|applied load + body reaction| / the larger force"),
+        Check("multiplier_penetration",
+              measures["max_penetration_m"] / al_tol if al_tol > 0 else None,
+              LIMITS["multiplier_penetration"],
+              "deepest penetration / the augmented Lagrangian's tolerance"),
         Check("contact_area", area / tight if tight > 0 else None, LIMITS["contact_area"],
               "contact area / area of the pattern that started inside the body"),
     ]  # fmt: skip

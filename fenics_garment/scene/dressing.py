@@ -100,6 +100,10 @@ class DressReport:
     al_kappa: list[float] = field(default_factory=list)  # the penalty of each pass [Pa/m]
     al_recoveries: list[str] = field(default_factory=list)  # after failed passes (uzawa)
     al_iterations: list[int] = field(default_factory=list)  # Newton its of each pass (uzawa)
+    al_converged: bool = True  # the penetration reached the tolerance (or no multipliers used)
+    al_message: str = ""  # why not, when not
+    answer_atol: float = 0.0  # the absolute tolerance the answer's last solve met [N]
+    answer_note: str = ""  # why that is the path tolerance, when it is
     completed: bool = False
     #: the coarser garment levels this dressing started from (``scene.sequence``), coarsest first
     levels: list[dict] = field(default_factory=list)
@@ -141,6 +145,10 @@ class DressReport:
             "augmented_lagrangian_kappa_Pa_per_m": self.al_kappa,
             "augmented_lagrangian_recoveries": self.al_recoveries,
             "augmented_lagrangian_newton_iterations": self.al_iterations,
+            "augmented_lagrangian_converged": self.al_converged,
+            "augmented_lagrangian_message": self.al_message,
+            "answer_atol_N": self.answer_atol,
+            "answer_note": self.answer_note,
             "all_newton_iterations": self.all_newton_iterations,
             "completed": self.completed,
             "sequence": self.levels,
@@ -434,42 +442,9 @@ def dress(
                 tolerances=(path_atol, atol), multipliers=kappa,
             )  # fmt: skip
         solver.set_atol(atol)
+        rep.answer_atol = atol
         if augmented_lagrangian is not None:
-            tol, max_updates = augmented_lagrangian
-            solve = _retrying(solver, q, st)
-            with _final_solves(solver):
-                # the passes at the path tolerance: only their penetration is used ...
-                solver.set_atol(path_atol)
-                al = uzawa.augmented_lagrangian(
-                    st, float(contact.kappa.value), solve, tol=tol,
-                    max_updates=max_updates, stiffen=contact.kappa, unknown=q,
-                )  # fmt: skip
-                solver.set_atol(atol)
-                updates = len(al.penetration) - 1
-                if al.converged and path_atol > atol:
-                    # ... and the answer, at the last multipliers, at the solver's tolerance
-                    _finish(al, solve, st)
-            rep.al_updates = updates
-            rep.al_penetration = al.penetration
-            rep.al_kappa = al.kappa
-            rep.al_recoveries = al.recoveries
-            rep.al_iterations = al.newton_iterations
-            pr.kappa = float(contact.kappa.value)
-            if not al.converged:
-                if not al.penetration:
-                    why = "the solve after the first multiplier update failed"
-                elif not math.isfinite(al.penetration[-1]):
-                    why = (
-                        f"the penetration reached {al.penetration[-2]:.3g} m but the last "
-                        "solve at the final multipliers (to the answer's tolerance) failed"
-                    )
-                else:
-                    why = (
-                        f"penetration {al.penetration[-1]:.3g} m not below {tol:.3g} m after "
-                        f"{updates} multiplier updates (penalty {al.kappa[-1]:.3g} Pa/m)"
-                    )
-                raise DressingFailed(rep, 0.0, f"augmented Lagrangian: {why}")  # fmt: skip
-            st.accept_step()
+            _multipliers(pr, built, solver, *augmented_lagrangian, (path_atol, atol))
         rep.completed = True
         pr.stage = "done"
         if on_checkpoint:
@@ -547,17 +522,77 @@ def _sew(
             )  # fmt: skip
 
 
-def _finish(al: uzawa.UzawaReport, solve, state) -> None:
-    """Converge the answer of a converged multiplier loop to the solver's tolerance (its passes
-    ran at the path tolerance): one more pass at the same multipliers, recorded as a pass that
-    updates nothing; a failure or a penetration above the tolerance then
-    leaves ``al.converged`` false."""
-    its, reason = solve()
-    al.newton_iterations.append(its)
-    al.kappa.append(al.kappa[-1])
-    pen = uzawa.max_penetration(state) if reason > 0 else math.inf
-    al.penetration.append(pen)
-    al.converged = pen <= al.tolerance
+def _multipliers(
+    pr: Progress, built, solver: NonlinearSolver, tol: float, max_updates: int,
+    tolerances: tuple[float, float],
+) -> None:  # fmt: skip
+    """Uzawa at s = 0 (:func:`uzawa.augmented_lagrangian`) to the penetration ``tol`` [m], its
+    passes at the path tolerance, then the answer at the last multipliers to the solver's
+    (``tolerances`` = (path, answer) absolute tolerances [N]).
+
+    A converging run is never thrown away: the loop itself goes on past ``max_updates`` while it
+    contracts; if the answer's solve fails (on the dress from flat pieces at 29.2 and 25 mm it
+    cycled or diverged at c = 0 after the multipliers had converged) the last converged pass is
+    kept, converged to the path tolerance (``DressReport.answer_atol``); if the penetration
+    does not reach ``tol`` the last converged state is kept too and ``DressReport.al_message``
+    says so — the result check ``multiplier_penetration`` then fails (exit 4), not the run.
+    """
+    path_atol, atol = tolerances
+    contact, st, q, rep = built.contact, built.contact.state, built.model.q, pr.report
+    solve = _retrying(solver, q, st)
+    released = _snapshot(q, st, contact)
+    with _final_solves(solver):
+        solver.set_atol(path_atol)
+        al = uzawa.augmented_lagrangian(
+            st, float(contact.kappa.value), solve, tol=tol,
+            max_updates=max_updates, stiffen=contact.kappa, unknown=q,
+        )  # fmt: skip
+        solver.set_atol(atol)
+        rep.al_updates = len(al.penetration) - 1
+        rep.answer_atol = path_atol
+        if not al.penetration:  # no pass converged: the released state back
+            uzawa.put_back(st, q, contact.kappa, *released)
+        elif path_atol > atol:  # the answer, at the last multipliers, at the solver's tolerance
+            kept = _snapshot(q, st, contact)
+            its, reason = solve()
+            al.newton_iterations.append(its)
+            al.kappa.append(al.kappa[-1])
+            if reason > 0:
+                rep.answer_atol = atol
+                al.penetration.append(uzawa.max_penetration(st))
+                al.converged = al.penetration[-1] <= tol
+            else:
+                uzawa.put_back(st, q, contact.kappa, *kept)
+                rep.answer_note = (
+                    f"the solve at the final multipliers to the answer's tolerance {atol:.3g} N "
+                    f"failed (SNES reason {reason}, {reason_name(reason)}): the answer is the "
+                    f"last multiplier pass, converged to {path_atol:.3g} N"
+                )
+        else:
+            rep.answer_atol = atol
+    rep.al_penetration = al.penetration
+    rep.al_kappa = al.kappa
+    rep.al_recoveries = al.recoveries
+    rep.al_iterations = al.newton_iterations
+    rep.al_converged = al.converged
+    pr.kappa = float(contact.kappa.value)
+    if not al.converged:
+        pen = uzawa.max_penetration(st)
+        what = (
+            "no multiplier pass converged (the released state is kept)"
+            if not al.penetration
+            else f"{rep.al_updates} multiplier updates (penalty {al.kappa[-1]:.3g} Pa/m)"
+        )
+        rep.al_message = (
+            f"augmented Lagrangian: penetration {pen:.3g} m not below {tol:.3g} m after {what}; "
+            "the last converged state is the answer"
+        )
+    st.accept_step()
+
+
+def _snapshot(q, st, contact) -> tuple[np.ndarray, np.ndarray, float]:
+    """(unknown, multipliers, penalty) now: what :func:`uzawa.put_back` restores."""
+    return q.x.array.copy(), st.lam.x.array.copy(), float(contact.kappa.value)
 
 
 def secant_start(

@@ -537,6 +537,10 @@ def solve_stage(
     say(f"  dressed: {len(report.steps)} solves, {report.newton_iterations} Newton iterations"
         f"{passes}, {len(report.failures)} cut(s) ({times['dressing']:.1f} s)")  # fmt: skip
     _say_release(say, built, report, completed)
+    if report.answer_note:
+        say(f"  note: {report.answer_note}")
+    if report.al_message:
+        say(f"  WARNING: {report.al_message}")
     if completed:
         frames.write()
     frames.close(comm)
