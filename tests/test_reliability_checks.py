@@ -101,7 +101,8 @@ def test_a_multiplier_loop_that_cannot_reach_its_tolerance_keeps_its_answer(tmp_
     """No multiplier update allowed (``max_updates = 0``) and a tolerance of 1e-6 h: the
     augmented Lagrangian stops after its first pass with the penetration above it. The run keeps
     its last converged state as the answer, writes its outputs and fails the check
-    ``multiplier_penetration`` (exit 4), not the dressing (exit 3); the answer is an equilibrium (the force balance holds)."""
+    ``multiplier_penetration`` (exit 4), not the dressing (exit 3); the answer is an
+    equilibrium (the force balance holds)."""
     physics = {"contact": "augmented-lagrangian", "tolerance": 1e-6, "max_updates": 0}
     s = small_tube(physics=physics)
     code = cli.main(["run", _scene_file(tmp_path, s), "-o", str(tmp_path)])
