@@ -26,6 +26,8 @@ RUN apt-get -o Acquire::Check-Valid-Until=false update \
         python3-dolfinx-real \
         python3-gmsh \
         python3-meshio \
+        python3-trimesh \
+        python3-ezdxf \
         python3-h5py \
         python3-scipy \
         python3-matplotlib \
