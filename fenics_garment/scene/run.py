@@ -428,6 +428,8 @@ def _run_in(
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
+    if scene.output.report:
+        write_report(folder, comm, say, result.summary)
     state.finish(_status(result))
     _print_regions(say, result.regions)
     for c in result.checks:
@@ -812,8 +814,46 @@ def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) ->
             _pictures(folder, built, (f["x_g"], f["p_g"]), f["p_body"])
         if built.garment.rest is not None:
             _write_pattern(folder, built)
+        if scene.output.report:
+            t0 = time.perf_counter()
+            _write_surfaces(folder, built, f)
+            result.summary["time_s"]["report"] = time.perf_counter() - t0
 
     output.guarded(built.model.geometry.mesh.comm, write)
+
+
+def _write_surfaces(folder: Path, built: scene_build.Built, f: dict) -> None:
+    """The surfaces of the report's 3D view (:mod:`fenics_garment.report.surfaces`): the body
+    and the deformed garment with their pressure [Pa]."""
+    from fenics_garment.report import Surface, write_surfaces
+
+    b = built.body
+    write_surfaces(folder, Surface.of(b.vertices, b.triangles, f["p_body"]),
+                   Surface.of(f["x_g"], built.garment.triangles(), f["p_g"]))  # fmt: skip
+
+
+def write_report(folder: Path, comm: MPI.Comm, say: Callable[..., object], summary: dict) -> None:
+    """``report.html`` of the run in ``folder`` (rank 0; collective); its time is added to
+    ``time_s.report`` of ``summary.json`` (with the surfaces'). A report that cannot be built is
+    a WARNING (the run's own outputs are written); one that cannot be written (a full disk) is an
+    :class:`~fenics_garment.output.OutputError`, as for every file."""
+    from fenics_garment.report import write_report as write_html
+
+    def write() -> None:
+        try:
+            path, seconds = write_html(folder)
+        except OSError:
+            raise
+        except Exception as err:  # a bug of the report: the run's results stand
+            print(f"  WARNING: the HTML report was not written: {type(err).__name__}: {err}",
+                  flush=True)  # fmt: skip
+            return
+        summary["time_s"]["report"] = summary["time_s"].get("report", 0.0) + seconds
+        output.write_summary(folder, summary, summary["regions"])
+        say(f"  report: {path.name} ({path.stat().st_size / 1e6:.1f} MB, "
+            f"{summary['time_s']['report']:.1f} s)")  # fmt: skip
+
+    output.guarded(comm, write)
 
 
 def _write_pattern(folder: Path, built: scene_build.Built) -> None:
