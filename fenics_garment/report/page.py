@@ -144,8 +144,9 @@ def checks_section(summary: dict) -> str:
 
 def header_section(folder: Path, summary: dict, state: dict) -> str:
     name = escape(str(summary.get("scene", folder.name)))
-    completed = summary.get("completed", False)
-    status = state.get("status") or ("completed" if completed else "stopped")
+    # from the summary: run.json says "running" while the run writes its report
+    status = ("stopped" if not summary.get("completed", False) else
+              "completed" if summary.get("checks_passed", True) else "checks failed")  # fmt: skip
     kind = {"completed": "pass", "checks failed": "warn"}.get(status, "fail")
     facts = [
         ("garment", f"{summary.get('fabric', '?')} {summary.get('garment', '?')}"),
