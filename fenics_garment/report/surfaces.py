@@ -46,8 +46,10 @@ def cluster(surface: Surface, cell: float) -> Surface:
     """Vertex clustering on a grid of ``cell`` [m]: the vertices of each grid cell merge into
     their mean (pressure averaged too); triangles that collapse, or repeat, are dropped."""
     v = surface.vertices.astype(np.float64)
-    keys = np.floor((v - v.min(axis=0)) / cell).astype(np.int64)
-    _, label, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
+    ijk = np.floor((v - v.min(axis=0)) / cell).astype(np.int64)
+    dims = ijk.max(axis=0) + 1
+    keys = ijk[:, 0] + dims[0] * (ijk[:, 1] + dims[1] * ijk[:, 2])  # one integer per grid cell
+    _, label, counts = np.unique(keys, return_inverse=True, return_counts=True)
     label = label.reshape(-1)
     n = len(counts)
     merged = np.zeros((n, 3))
@@ -57,7 +59,8 @@ def cluster(surface: Surface, cell: float) -> Surface:
     tri = label[surface.triangles]
     ok = (tri[:, 0] != tri[:, 1]) & (tri[:, 1] != tri[:, 2]) & (tri[:, 0] != tri[:, 2])
     tri = tri[ok]
-    _, first = np.unique(np.sort(tri, axis=1), axis=0, return_index=True)
+    st = np.sort(tri, axis=1).astype(np.int64)
+    _, first = np.unique((st[:, 0] * n + st[:, 1]) * n + st[:, 2], return_index=True)
     tri = tri[np.sort(first)]
     used = np.unique(tri)  # drop the clusters no triangle uses
     renumber = np.full(n, -1, dtype=np.int64)
@@ -78,7 +81,7 @@ def decimate(surface: Surface, max_triangles: int = MAX_TRIANGLES) -> Surface:
         out = cluster(surface, cell)
         if len(out.triangles) <= max_triangles:
             return out
-        cell *= 1.15
+        cell *= max(1.03, 1.02 * (len(out.triangles) / max_triangles) ** 0.5)
 
 
 def write_surfaces(folder: Path, body: Surface, garment: Surface) -> Path:
