@@ -185,7 +185,7 @@ def time_bar(times: dict[str, float]) -> str:
             f'<rect x="{10 + x:.1f}" y="6" width="{w:.1f}" height="26" fill="{colour}">'
             f"<title>{name}: {v:.2f} s ({v / total:.0%})</title></rect>"
         )
-        if w > 60:
+        if w > 6.5 * len(name) + 8:  # the label fits on its part
             out.append(f'<text x="{10 + x + w / 2:.1f}" y="24" text-anchor="middle" '
                        f'class="onbar">{name.replace("_", " ")}</text>')  # fmt: skip
         x += w

@@ -131,9 +131,11 @@ def checks_section(summary: dict) -> str:
     checks = summary.get("checks") or {}
     rows = []
     for name, c in checks.items():
-        side = "≤" if c.get("value") is None or (c["value"] <= c["limit"]) == c.get("ok") else "≥"
+        side = ""  # which side of the limit passes: seen from a value and its verdict
+        if c.get("value") is not None:
+            side = "≤ " if (c["value"] <= c["limit"]) == c.get("ok") else "≥ "
         rows.append([escape(name), _chip(check_status(c)), _num(c.get("value")),
-                     f"{side} {_num(c.get('limit'))}", escape(c.get("what", ""))])  # fmt: skip
+                     f"{side}{_num(c.get('limit'))}", escape(c.get("what", ""))])  # fmt: skip
     table = _table(["check", "result", "value", "limit", "what"], rows, text=(0, -1))
     note = (
         f'<p class="small">warn: passes, but within {WARN_MARGIN:.0%} of its limit; fail: '
