@@ -60,6 +60,12 @@ def _browser() -> tuple[str, str]:
 
 
 @pytest.fixture(scope="module")
+def browser() -> tuple[str, str]:
+    """(Chromium, chromedriver): checked before the scene is run, to skip at once."""
+    return _browser()
+
+
+@pytest.fixture(scope="module")
 def report(tmp_path_factory) -> Path:
     """report.html of the tube scene, run on a coarser body (about 10 s)."""
     if MPI.COMM_WORLD.size > 1:
@@ -74,13 +80,13 @@ def report(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def page(report: Path):
-    browser, driver_path = _browser()
+def page(browser: tuple[str, str], report: Path):
+    binary, driver_path = browser
     from selenium import webdriver
     from selenium.webdriver.chrome.service import Service
 
     options = webdriver.ChromeOptions()
-    options.binary_location = browser
+    options.binary_location = binary
     for arg in ("--headless=new", "--no-sandbox", "--disable-dev-shm-usage",
                 "--use-angle=swiftshader", "--enable-unsafe-swiftshader",
                 "--window-size=1200,1000", "--force-device-scale-factor=1"):  # fmt: skip

@@ -581,8 +581,8 @@ def _dressing_stage(built: scene_build.Built, progress_from: Progress | None) ->
     total = None
     if d.schedule == "fixed":
         sew = d.sew_steps if built.garment.rest is not None else 0
-        total = expected_solves(d.steps, sew, built.regularisation.c0, d.release_ratio,
-                                         C_ZERO)  # fmt: skip
+        c0 = built.regularisation.c0
+        total = expected_solves(d.steps, sew, c0, d.release_ratio, C_ZERO)
     h = built.scene.garment.mesh_size
     current_line().stage(f"dressing ({h * 1e3:.0f} mm garment mesh)", total)
     if progress_from is not None and progress_from.report is not None:
