@@ -8,6 +8,7 @@ with the reason otherwise. WebGL runs on SwiftShader, Chromium's CPU renderer: n
 
 import io
 import os
+import re
 import shutil
 from dataclasses import replace
 from pathlib import Path
@@ -134,6 +135,14 @@ def test_canvas_draws_the_pressure_and_turns(page):
     assert drawn > 0.05 * total, f"only {drawn} of {total} canvas pixels drawn"
     assert coloured > 0.01 * total, f"only {coloured} pixels in the pressure's colours"
     canvas = page.find_element("css selector", "canvas.view")
+    # hovering the middle of the view, the middle of the tube, reads its pressure (Laplace:
+    # about 0.45 kPa); the canvas in view first (selenium aims at the middle of what is seen)
+    page.execute_script("arguments[0].scrollIntoView()", canvas)
+    ActionChains(page).move_to_element(canvas).perform()
+    page.execute_script("return new Promise((done) => requestAnimationFrame(() => done()))")
+    text = page.find_element("css selector", ".viewer3d .readout").text
+    assert re.fullmatch(r"garment: \d+\.\d{3} kPa", text), text
+    assert 0.3 < float(text.split()[1]) < 0.6, text
     ActionChains(page).move_to_element(canvas).click_and_hold().move_by_offset(150, 40).release(
     ).perform()  # fmt: skip
     page.execute_script("return new Promise((done) => requestAnimationFrame(() => done()))")

@@ -211,7 +211,9 @@ def viewer_section(surfaces: dict[str, Surface]) -> str:
         '<div><button data-yaw="0">front</button> <button data-yaw="3.14159">back</button> '
         '<button data-yaw="1.5708">side</button></div>'
         '<canvas class="colourbar" width="130" height="300"></canvas>'
-        '<div class="small">drag: rotate<br>wheel: zoom<br>double-click: reset</div>'
+        '<div class="readout"></div>'
+        '<div class="small">drag: rotate<br>wheel: zoom<br>double-click: reset<br>'
+        "hover: the pressure there</div>"
         '<div class="status"></div></div></div>'
         f'<p class="small">{counts} (decimated for the page when large).</p>'
         f'<script type="application/json" id="surface-data">{json.dumps(data)}</script>'

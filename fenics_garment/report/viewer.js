@@ -74,18 +74,56 @@
   }
 
   // the camera orbits the centre; z is up, the body faces -y (yaw 0: seen from the front)
-  function view(cam) {
+  function basis(cam) {
     const cy = Math.cos(cam.yaw), sy = Math.sin(cam.yaw);
     const cp = Math.cos(cam.pitch), sp = Math.sin(cam.pitch);
-    const right = [cy, sy, 0];
     const back = [sy * cp, -cy * cp, sp]; // from the centre towards the eye
-    const up = [-sy * sp, cy * sp, cp];
-    const e = cam.centre.map((c, k) => c + cam.distance * back[k]);
-    const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    return {
+      right: [cy, sy, 0], up: [-sy * sp, cy * sp, cp], back: back,
+      eye: cam.centre.map((c, k) => c + cam.distance * back[k]),
+    };
+  }
+
+  const dot = (a, b) => a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+
+  function view(cam) {
+    const { right, up, back, eye: e } = basis(cam);
     return new Float32Array([
       right[0], up[0], back[0], 0, right[1], up[1], back[1], 0, right[2], up[2], back[2], 0,
       -dot(right, e), -dot(up, e), -dot(back, e), 1,
     ]);
+  }
+
+  // The surface point under a pixel (nx, ny in [-1, 1]): the nearest triangle the ray through
+  // it hits (Moller-Trumbore), each mesh's distance lengthened by its bias (see draw).
+  function pick(cam, fov, aspect, nx, ny, meshes) {
+    const { right, up, back, eye } = basis(cam);
+    const tf = Math.tan(fov / 2);
+    const d = [0, 1, 2].map((k) => -back[k] + nx * tf * aspect * right[k] + ny * tf * up[k]);
+    let best = null;
+    for (const [m, bias] of meshes) {
+      const v = m.surface.vertices, tri = m.surface.triangles;
+      for (let t = 0; t < tri.length; t += 3) {
+        const a = 3 * tri[t], b = 3 * tri[t + 1], c = 3 * tri[t + 2];
+        const e1 = [v[b] - v[a], v[b + 1] - v[a + 1], v[b + 2] - v[a + 2]];
+        const e2 = [v[c] - v[a], v[c + 1] - v[a + 1], v[c + 2] - v[a + 2]];
+        const h = [d[1] * e2[2] - d[2] * e2[1], d[2] * e2[0] - d[0] * e2[2], d[0] * e2[1] - d[1] * e2[0]];
+        const det = dot(e1, h);
+        if (Math.abs(det) < 1e-20) continue;
+        const sv = [eye[0] - v[a], eye[1] - v[a + 1], eye[2] - v[a + 2]];
+        const u = dot(sv, h) / det;
+        if (u < 0 || u > 1) continue;
+        const q = [sv[1] * e1[2] - sv[2] * e1[1], sv[2] * e1[0] - sv[0] * e1[2], sv[0] * e1[1] - sv[1] * e1[0]];
+        const w = dot(d, q) / det;
+        if (w < 0 || u + w > 1) continue;
+        const dist = dot(e2, q) / det + bias;
+        if (dist > 0 && (!best || dist < best.dist)) {
+          const p = m.surface.pressure;
+          best = { dist: dist, mesh: m, pressure: (1 - u - w) * p[tri[t]] + u * p[tri[t + 1]] + w * p[tri[t + 2]] };
+        }
+      }
+    }
+    return best;
   }
 
   const VERTEX_SHADER = `
@@ -284,11 +322,30 @@
       if (!pending) { pending = true; requestAnimationFrame(draw); }
     }
 
+    const readout = root.querySelector(".readout");
+    function hover(e) {
+      const r = canvas.getBoundingClientRect();
+      const nx = (2 * (e.clientX - r.left)) / r.width - 1, ny = 1 - (2 * (e.clientY - r.top)) / r.height;
+      const shift = DEPTH_SHIFT * fit.radius;
+      const meshes = visible.map((m) => [m, m === surfaces.body && visible.length > 1 ? shift : 0]);
+      const hit = pick(cam, fov, r.width / r.height, nx, ny, meshes);
+      const name = hit && (hit.mesh === surfaces.body ? "body" : "garment");
+      readout.textContent = hit ? `${name}: ${(hit.pressure * 1e-3).toFixed(3)} kPa` : "";
+    }
+
     let drag = null;
+    let hoverPending = false;
     canvas.addEventListener("pointerdown", (e) => { drag = [e.clientX, e.clientY]; canvas.setPointerCapture(e.pointerId); });
     canvas.addEventListener("pointerup", () => { drag = null; });
+    canvas.addEventListener("pointerleave", () => { readout.textContent = ""; });
     canvas.addEventListener("pointermove", (e) => {
-      if (!drag) return;
+      if (!drag) {
+        if (!hoverPending) {
+          hoverPending = true;
+          requestAnimationFrame(() => { hoverPending = false; hover(e); });
+        }
+        return;
+      }
       cam.yaw -= 0.01 * (e.clientX - drag[0]);
       cam.pitch = Math.min(1.5, Math.max(-1.5, cam.pitch + 0.01 * (e.clientY - drag[1])));
       drag = [e.clientX, e.clientY];
