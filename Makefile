@@ -9,7 +9,7 @@ STAMP     := $(VENV)/.installed-stamp
 NP        ?= 2
 PYTEST    := $(PY) -m pytest
 
-.PHONY: demo test test-serial test-mpi test-slow lint bench docker-check clean-venv help
+.PHONY: demo test test-serial test-mpi test-slow chromium lint bench docker-check clean-venv help
 
 help:
 	@echo "make demo          run the main demo (creates .venv on first use)"
@@ -43,8 +43,18 @@ test-mpi: $(STAMP)
 
 # The verification runs that take 20 s to 2 min each (full scenes, load-step and mesh stress
 # tests, the long shell benchmarks): kept out of the default run's 15 minutes, run by CI after it.
-test-slow: $(STAMP)
+test-slow: $(STAMP) chromium
 	$(PYTEST) -m "slow and not mpi" tests
+
+# Chromium and its driver for the report's browser test (tests/test_report_browser.py), from
+# Debian's packages when run as root; otherwise that test skips and says why.
+chromium:
+	@if command -v chromium >/dev/null && command -v chromedriver >/dev/null; then :; \
+	elif [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null; then \
+		echo "installing chromium and chromium-driver (apt-get)"; \
+		apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq \
+			chromium chromium-driver >/dev/null; \
+	else echo "chromium/chromedriver missing (not root): the browser test will skip"; fi
 
 lint: $(STAMP)
 	$(VENV)/bin/ruff check .

@@ -1,4 +1,5 @@
-"""The ``fenics-garment`` command line: ``info``, ``demo``, ``run SCENE.toml`` and ``check``.
+"""The ``fenics-garment`` command line: ``info``, ``demo``, ``run SCENE.toml``, ``check`` and
+``report FOLDER``.
 
 ``main(argv) -> int`` is the whole program so that tests call it directly. Messages are printed
 on rank 0 only; every rank runs the same commands so the program works under ``mpiexec -n N``.
@@ -202,6 +203,28 @@ def _cmd_check(args: argparse.Namespace) -> int:
     return _check(config.load(args.scene))
 
 
+def _cmd_report(args: argparse.Namespace) -> int:
+    """Rebuild ``report.html`` of a run folder from its files (no solve; rank 0 writes)."""
+    from mpi4py import MPI
+
+    from fenics_garment.report import ReportError, write_report
+
+    folder = Path(args.folder)
+    if MPI.COMM_WORLD.rank != 0:
+        return 0
+    if not folder.is_dir():
+        print(f"error: no such folder: {folder}", file=sys.stderr)
+        return EXIT_INPUT
+    try:
+        path, seconds = write_report(folder)
+    except ReportError as err:
+        print(f"error: {_one_line(err)}", file=sys.stderr)
+        return EXIT_INPUT
+    if not args.quiet:
+        print(f"{path} ({path.stat().st_size / 1e6:.1f} MB, {seconds:.1f} s)")
+    return 0
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="fenics-garment",
@@ -266,6 +289,20 @@ def build_parser() -> argparse.ArgumentParser:
     )
     p_check.add_argument("scene", help="scene file")
     p_check.set_defaults(func=_cmd_check)
+
+    p_report = sub.add_parser(
+        "report",
+        help="rebuild report.html of a run's output folder",
+        description="Write FOLDER/report.html from the files of the run in FOLDER (summary.json, "
+        "the pressure maps, report_surfaces.npz or body_pressure.vtu and final_state.xdmf): "
+        "one self-contained page, offline, with the pressure maps, the region table and chart "
+        "(error bars, comfort bands), the result checks, the dressing's convergence history, "
+        "the time split and a 3D view of the pressure. A run writes it at its end by itself "
+        "([output] report). Exit code 0: written; 2: FOLDER is not a run's output folder.",
+    )
+    p_report.add_argument("folder", help="the output folder of a run (<output root>/<scene name>/)")
+    p_report.add_argument("-q", "--quiet", action="store_true", help="print nothing")
+    p_report.set_defaults(func=_cmd_report)
     return parser
 
 

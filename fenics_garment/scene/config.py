@@ -250,6 +250,7 @@ class OutputConfig:
     vtx: bool = True
     xdmf: bool = True
     pictures: bool = True
+    report: bool = True  # report.html: maps, tables, checks, history, 3D view (one file)
     every_step: bool = True  # VTX frame per dressing step (else only the final state)
     error_bars: bool = False  # also solve on a √2× coarser garment: Richardson error bars
     sensor_diameter: float = 0.02  # the round pressure sensor of the regions' sensor_p95 [m]

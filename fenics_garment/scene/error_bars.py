@@ -210,7 +210,7 @@ def coarse_scene(scene: config.Scene) -> config.Scene:
     turn of a limb's curvature), with no files but the summary."""
     g = scene.garment
     g = replace(g, mesh_size=RATIO * g.mesh_size, per_turn=max(8, round(g.per_turn / RATIO)))
-    o = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
+    o = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False, report=False)
     return replace(scene, garment=g, output=o)
 
 
@@ -256,6 +256,10 @@ def run_with_error_bars(
         coarse = _coarse_level(run, scene, folder / run_folder.NESTED / scene.name, comm, kwargs)
         fine = _fine_level(run, scene, folder, comm, quiet, kwargs)
         _attach_bars(fine, coarse, state.run_id, comm)
+        if scene.output.report:  # again: the regions now have their error bars
+            from fenics_garment.scene.run import write_report
+
+            write_report(folder, comm, say, fine.summary)
         state.finish("completed" if fine.completed and fine.checks_passed else
                      "stopped" if not fine.completed else "checks failed")  # fmt: skip
     except BaseException:

@@ -43,10 +43,14 @@ from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.geometry import surface
 from fenics_garment.petsc_options import LINEAR_SOLVERS
+from fenics_garment.progress import ProgressLine, expected_solves
+from fenics_garment.progress import active as active_line
+from fenics_garment.progress import current as current_line
 from fenics_garment.scene import build as scene_build
 from fenics_garment.scene import checkpoint, checks, config, error_bars, preflight, sequence
 from fenics_garment.scene import folder as run_folder
 from fenics_garment.scene.dressing import (
+    C_ZERO,
     RELEASE_TOLERANCE,
     DressingFailed,
     DressReport,
@@ -358,8 +362,10 @@ def run(
     state.acquire()
     try:
         state.start(fresh=meta is None, clear=clear)
-        result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
-                         checkpoints=checkpoints, terms=terms)  # fmt: skip
+        line = ProgressLine(enabled=comm.rank == 0 and not quiet)
+        with active_line(line):
+            result = _run_in(state, scene, recorded, meta, first_step=first_step,
+                             checkpoints=checkpoints, terms=terms)  # fmt: skip
     except output.OutputError as err:
         state.finish("failed", collective=False)
         err.folder = err.folder or folder
@@ -395,15 +401,15 @@ def _run_in(
     recorded: config.Scene,
     meta: dict | None,
     *,
-    quiet: bool,
     first_step: float | None,
     checkpoints: bool,
     terms: TermsHook | None = None,
 ) -> RunResult:
-    """The run itself, in its locked folder: build, edit, solve, write."""
+    """The run itself, in its locked folder: build, edit, solve, write. Its lines go through
+    the progress line (:func:`fenics_garment.progress.current`: silent with ``quiet``)."""
     folder, comm = state.path, state.comm
     t_start = time.perf_counter()
-    say = (lambda *a: print(*a, flush=True)) if comm.rank == 0 and not quiet else (lambda *a: 0)
+    say = current_line().say
     text = config.dumps(recorded)
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
@@ -425,14 +431,18 @@ def _run_in(
     if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
         solved.report.levels = levels
         solved.report.sequence_failed = levels[-1]["message"]
+    current_line().stage("writing the outputs")
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
+    if scene.output.report:
+        write_report(folder, comm, say, result.summary)
     state.finish(_status(result))
     _print_regions(say, result.regions)
     for c in result.checks:
         if not c.ok:
             say("  " + c.warning())
+    current_line().close()
     say(f"outputs in {folder.resolve()} ({times['total']:.1f} s in all)")
     return result
 
@@ -453,6 +463,7 @@ def build_stage(
     if body is None:
         say(f"scene {scene.name!r}: {scene.garment.fabric} {scene.garment.kind} on a "
             f"{scene.body.kind} body, {comm.size} rank(s)")  # fmt: skip
+    current_line().stage("meshing and building the model")
     built = scene_build.build(scene, comm, body)
     elapsed = time.perf_counter() - t0
     if times is not None:
@@ -496,6 +507,7 @@ def solve_stage(
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
+    current_line().stage("JIT: compiling the forms")
     solver = scene_solver(built)
     solver.progress = _slow_iterations(say)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
@@ -554,11 +566,31 @@ SLOW_ITERATION_S = 10.0
 
 
 def _slow_iterations(say: Callable[..., object]) -> Callable[[int, float, float], None]:
-    def progress(its: int, fnorm: float, seconds: float) -> None:
+    """The solver's progress hook: every Newton iteration on the progress line, and a line of
+    its own for a slow one."""
+
+    def on_iteration(its: int, fnorm: float, seconds: float) -> None:
+        current_line().newton(its, fnorm)
         if seconds >= SLOW_ITERATION_S:
             say(f"    Newton iteration {its}: residual {fnorm:.3g} ({seconds:.0f} s)")
 
-    return progress
+    return on_iteration
+
+
+def _dressing_stage(built: scene_build.Built, progress_from: Progress | None) -> None:
+    """The progress line's dressing stage, with the solves the fixed schedule foresees
+    (:func:`fenics_garment.progress.expected_solves`; unknown on the adaptive schedule); a
+    resumed dressing counts the solves done before."""
+    d = built.scene.dressing
+    total = None
+    if d.schedule == "fixed":
+        sew = d.sew_steps if built.garment.rest is not None else 0
+        c0 = built.regularisation.c0
+        total = expected_solves(d.steps, sew, c0, d.release_ratio, C_ZERO)
+    h = built.scene.garment.mesh_size
+    current_line().stage(f"dressing ({h * 1e3:.0f} mm garment mesh)", total)
+    if progress_from is not None and progress_from.report is not None:
+        current_line().state.step = len(progress_from.report.steps)
 
 
 def scene_solver(built: scene_build.Built) -> NonlinearSolver:
@@ -683,12 +715,15 @@ def _dress(
                 else f"sewn {rec.shrink:10.3f}   " if rec.stage == "sew"
                 else f"spring c {rec.regularisation:8.2g} Pa/m")  # fmt: skip
         say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
+        kind = {"dress": "shrink", "sew": "sewing"}.get(rec.stage, "spring release")
+        current_line().step(kind, spring=rec.regularisation)
 
     def on_failure(target: float, its: int, reason: int, what: str = "shrink") -> None:
         to = f"{target * 1e3:6.2f} mm" if what == "shrink" else f"{target:.3f}"
         say(f"  {what} → {to} failed (SNES reason {reason}, {its} its): halving the step")
 
     write_ckpt = (lambda pr: ckpt.write(built, pr)) if ckpt is not None else None
+    _dressing_stage(built, progress_from=progress)
     try:
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
@@ -816,8 +851,46 @@ def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) ->
             _pictures(folder, built, (f["x_g"], f["p_g"]), f["p_body"])
         if built.garment.rest is not None:
             _write_pattern(folder, built)
+        if scene.output.report:
+            t0 = time.perf_counter()
+            _write_surfaces(folder, built, f)
+            result.summary["time_s"]["report"] = time.perf_counter() - t0
 
     output.guarded(built.model.geometry.mesh.comm, write)
+
+
+def _write_surfaces(folder: Path, built: scene_build.Built, f: dict) -> None:
+    """The surfaces of the report's 3D view (:mod:`fenics_garment.report.surfaces`): the body
+    and the deformed garment with their pressure [Pa]."""
+    from fenics_garment.report import Surface, write_surfaces
+
+    b = built.body
+    write_surfaces(folder, Surface.of(b.vertices, b.triangles, f["p_body"]),
+                   Surface.of(f["x_g"], built.garment.triangles(), f["p_g"]))  # fmt: skip
+
+
+def write_report(folder: Path, comm: MPI.Comm, say: Callable[..., object], summary: dict) -> None:
+    """``report.html`` of the run in ``folder`` (rank 0; collective); its time is added to
+    ``time_s.report`` of ``summary.json`` (with the surfaces'). A report that cannot be built is
+    a WARNING (the run's own outputs are written); one that cannot be written (a full disk) is an
+    :class:`~fenics_garment.output.OutputError`, as for every file."""
+    from fenics_garment.report import write_report as write_html
+
+    def write() -> None:
+        try:
+            path, seconds = write_html(folder)
+        except OSError:
+            raise
+        except Exception as err:  # a bug of the report: the run's results stand
+            print(f"  WARNING: the HTML report was not written: {type(err).__name__}: {err}",
+                  flush=True)  # fmt: skip
+            return
+        summary["time_s"]["report"] = summary["time_s"].get("report", 0.0) + seconds
+        output.write_summary(folder, summary, summary["regions"])
+        say(f"  report: {path.name} ({path.stat().st_size / 1e6:.1f} MB, "
+            f"{summary['time_s']['report']:.1f} s)")  # fmt: skip
+
+    output.guarded(comm, write)
 
 
 def _write_pattern(folder: Path, built: scene_build.Built) -> None:

@@ -51,7 +51,9 @@ def coarse_scenes(scene: Scene) -> list[Scene]:
     scene's own (the loader requires all to be; a scene made coarser in code, e.g. the coarse
     level of ``--error-bars``, drops the rest), coarsest first, with no outputs and no sequence
     of their own."""
-    out = replace(scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False)
+    out = replace(
+        scene.output, vtx=False, xdmf=False, pictures=False, error_bars=False, report=False
+    )
     d = replace(scene.dressing, sequence=[])
     g = scene.garment
 
