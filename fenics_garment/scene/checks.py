@@ -17,6 +17,11 @@ body. Each check compares an observable of the final state with an independent b
 * ``multiplier_penetration``: with the augmented Lagrangian, the deepest penetration at the end
   over the scene's tolerance (``[physics] tolerance`` × h), at most 1: a multiplier loop that
   stopped short keeps its last converged state as the answer and fails this check;
+* ``uncovered_contact``: the contact force on body parts the garment does not cover (arms and
+  head for a gilet or a dress, :data:`UNCOVERED`) over the whole contact force, at most
+  :data:`LIMITS` ``["uncovered_contact"]``: a torso garment pressing on an arm has an armhole
+  cut too small for this body (not applicable to a pattern, whose pieces may cover anything,
+  or on a body without those regions);
 * ``contact_area``: the area in contact at the end over the area of the pattern that started
   inside the body (where it is tight, it must end up on the body; not applicable to a garment
   that is nowhere tight).
@@ -40,8 +45,11 @@ LIMITS = {
     "spring": 0.01,
     "force_balance": 0.02,
     "multiplier_penetration": 1.0,
+    "uncovered_contact": 1e-3,
     "contact_area": 0.5,
 }
+#: The body regions each garment kind does not cover (``geometry.regions.REGIONS``).
+UNCOVERED = {kind: ("arms", "head") for kind in ("gilet", "dress", "stocking")}
 #: Which side of the bound is good: the contact area ratio must be at least its limit.
 AT_LEAST = ("contact_area",)
 
@@ -110,14 +118,26 @@ def _ratio(num: float, den: float) -> float:
     return 0.0 if num == 0 else math.inf
 
 
+def uncovered_force(kind: str, rows: list[dict]) -> float | None:
+    """Contact force on the regions ``kind`` does not cover over the whole contact force, from
+    the region table ``rows`` (``output.region_table``); None when not applicable."""
+    names = {r["region"] for r in rows}
+    skipped = [n for n in UNCOVERED.get(kind, ()) if n in names]
+    if not skipped:
+        return None
+    total = sum(r["force_N"] for r in rows)
+    return _ratio(sum(r["force_N"] for r in rows if r["region"] in skipped), total)
+
+
 def result_checks(
-    built, measures: dict, spring_traction: float, tight: float, applied_reaction
-) -> list[Check]:
+    built, measures: dict, spring_traction: float, tight: float, applied_reaction,
+    regions: list[dict] | None = None,
+) -> list[Check]:  # fmt: skip
     """The checks of the module doc on the final state.
 
     ``measures``: the run's contact measures (``max_penetration_m``, ``max_pressure_kPa``,
     ``contact_area_garment_m2``, ``contact_force_N``); ``tight``: :func:`tight_area` of the
-    pattern; ``applied_reaction``: :func:`forces`.
+    pattern; ``applied_reaction``: :func:`forces`; ``regions``: the region table.
     """
     thickness = _thickness(built)
     p_max = measures["max_pressure_kPa"] * 1e3
@@ -142,6 +162,10 @@ def result_checks(
               measures["max_penetration_m"] / al_tol if al_tol > 0 else None,
               LIMITS["multiplier_penetration"],
               "deepest penetration / the augmented Lagrangian's tolerance"),
+        Check("uncovered_contact",
+              uncovered_force(built.scene.garment.kind, regions or []),
+              LIMITS["uncovered_contact"],
+              "contact force on arms and head / the whole contact force"),
         Check("contact_area", area / tight if tight > 0 else None, LIMITS["contact_area"],
               "contact area / area of the pattern that started inside the body"),
     ]  # fmt: skip

@@ -791,7 +791,7 @@ def _outputs(
     measures = _contact_measures(built)
     applied, reaction = checks.forces(built)
     found = checks.result_checks(built, measures, report.spring_traction, tight,
-                                 (applied, reaction))  # fmt: skip
+                                 (applied, reaction), regions)  # fmt: skip
     max_strain = comm.allreduce(float(strain.x.array.max()), op=MPI.MAX)
     summary = {
         "scene": scene.name,
