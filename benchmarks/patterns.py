@@ -144,6 +144,20 @@ def markdown(data: dict | None = None) -> str:
             "stall is a run that did not dress or kept its stabilising spring.", "",
             *sweep_bench.TABLE_HEAD]  # fmt: skip
     out += [sweep_bench.table_row(stem, v["runs"]) for stem, v in data.get("sweep", {}).items()]
+    kept = [(stem, r["mesh_size"]) for stem, v in data.get("sweep", {}).items()
+            for r in v["runs"] if r.get("answer_note")]  # fmt: skip
+    if kept:
+        out += ["", "Answers converged to the path tolerance only (the last solve at the final "
+                "multipliers failed; the last converged multiplier pass is the answer, its "
+                "penetration within the tolerance): "
+                + ", ".join(f"{s} at {h * 1e3:.1f} mm" for s, h in kept) + "."]  # fmt: skip
+    loads = [r["loadavg"][0] for v in data.get("sweep", {}).values() for r in v["runs"]
+             if r.get("loadavg")]  # fmt: skip
+    if loads:
+        out.append(
+            f"Machine load (1-min load average on 2 cores) during the runs: "
+            f"{min(loads):.1f}–{max(loads):.1f}: wall times are not comparable."
+        )
     return "\n".join(out)
 
 

@@ -288,6 +288,9 @@ def _record(res, spec: dict, comm) -> dict:
         "failures": sm["dressing"]["failed_attempts"],
         "max_pressure_kPa": sm["max_pressure_kPa"],
         "message": sm["message"],
+        # why the answer is converged to the path tolerance only (its last solve failed), or ""
+        "answer_note": sm["dressing"].get("answer_note", ""),
+        "checks_passed": sm.get("checks_passed"),
         "contact_force_N": sm["contact_force_N"],
         "loadavg": os.getloadavg(),
     }
