@@ -168,6 +168,26 @@ def test_a_dxf_without_seams_is_refused_in_one_line(capsys, tmp_path):
     assert len(err) == 1 and "sewn to no other panel" in err[0] and "companion" in err[0], err
 
 
+def test_a_panel_of_another_fabric_is_refused_in_one_line(capsys, tmp_path):
+    """A garment is of one fabric (the scene's): a panel naming another is refused before
+    meshing, not simulated in the scene's fabric without a word."""
+    from fenics_garment.cli import main
+
+    shipped = Path(__file__).parent.parent / "fenics_garment" / "scenes"
+    pattern = (shipped / "patterns" / "darted_top.toml").read_text()
+    assert "[[panel]]" in pattern
+    (tmp_path / "top.toml").write_text(
+        pattern.replace("[[panel]]", '[[panel]]\nfabric = "nylon"', 1)
+    )
+    text = (shipped / "darted_top.toml").read_text()
+    scene = tmp_path / "scene.toml"
+    scene.write_text(text.replace("patterns/darted_top.toml", "top.toml"))
+    code = main(["check", str(scene)])
+    err = capsys.readouterr().err.strip().splitlines()
+    assert code == 2
+    assert len(err) == 1 and "'nylon'" in err[0] and "one fabric" in err[0], err
+
+
 @pytest.mark.slow
 def test_builtin_gilet_from_flat_pieces(tmp_path):
     """The built-in gilet cut into princess-seamed flat pieces (rest = "pattern") dresses with

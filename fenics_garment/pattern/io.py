@@ -16,7 +16,8 @@ refused (a misspelt key is an error, not a silently ignored line)::
 
     [[panel]]
     name = "front"               # required, unique
-    fabric = "jersey"            # optional: a fabric of the scene (default: the scene's)
+    fabric = "cotton"            # optional: the scene's [garment] fabric (one fabric per garment: a
+                                 # panel naming another is refused)
     grain = [0, 1]               # required: the warp direction in the panel's plane
     start = [0, 0]               # where the outline starts (or `from` on the first edge)
     edges = [                    # the outline, one edge to the next; the last closes it
@@ -61,7 +62,7 @@ DXF-AAMA has no seams; a companion file in our format names the DXF and adds the
     [[panel]]                    # optional, per DXF piece: no `edges`, `start`
     name = "FRONT"               # the piece name of the DXF
     edge_names = ["hem", "side_left", "", "neck"]   # names for the DXF's edges, in order
-    fabric = "jersey"            # and `grain` (overrides the DXF's), `placement`, `wrap`,
+    fabric = "cotton"            # and `grain` (overrides the DXF's), `placement`, `wrap`,
                                  # `darts`
     [[seam]]
     a = { panel = "FRONT", edge = "side_left" }

@@ -181,6 +181,13 @@ def pattern_file(scene, fail: Callable[[str, str], None]) -> None:
     except PatternError as err:
         fail("garment.pattern", f"= {scene.garment.pattern!r}: {err}")
         return
+    other = [(n, p.fabric) for n, p in pattern.panels.items()
+             if p.fabric is not None and p.fabric != scene.garment.fabric]  # fmt: skip
+    if other:
+        fail("garment.pattern", f"= {scene.garment.pattern!r}: panel {other[0][0]!r} is of "
+             f"{other[0][1]!r}, but a garment is of one fabric here ([garment] fabric = "
+             f"{scene.garment.fabric!r}): per-panel fabrics are not modelled yet")  # fmt: skip
+        return
     sewn = {r.panel for s in pattern.seams for r in (s.a, s.b) if s.a.panel != s.b.panel}
     loose = [n for n in pattern.panels if n not in sewn]
     if len(pattern.panels) > 1 and loose:
