@@ -17,7 +17,7 @@ from fenics_garment import __version__  # noqa: E402
 
 project = "fenics-garment"
 author = "fenics-garment developers"
-copyright = "fenics-garment developers"  # noqa: A001
+copyright = "fenics-garment developers"
 release = version = __version__
 
 extensions = [
@@ -58,9 +58,15 @@ html_last_updated_fmt = None
 # held to nitpicky.
 nitpicky = True
 nitpick_ignore_regex = [
-    (r"py:.*", r"(ufl|numpy|np|npt|dolfinx|petsc4py|PETSc|mpi4py|MPI|basix|gmsh|meshio|scipy"
-     r"|trimesh|igl|ezdxf|collections|pathlib|typing|types|argparse|dataclasses|enum|abc"
-     r"|concurrent|subprocess|io|os|json|tomllib)(\..*)?"),
-    (r"py:class", r"(Path|Callable|Iterable|Sequence|Mapping|Any|Expr|Form|Measure|Constant"
-     r"|Function|FunctionSpace|Mesh|Comm|NDArray|ArrayLike|F64|I32|optional)"),
+    (
+        r"py:.*",
+        r"(ufl|numpy|np|npt|dolfinx|petsc4py|PETSc|mpi4py|MPI|basix|gmsh|meshio|scipy"
+        r"|trimesh|igl|ezdxf|collections|pathlib|typing|types|argparse|dataclasses|enum|abc"
+        r"|concurrent|subprocess|io|os|json|tomllib)(\..*)?",
+    ),
+    (
+        r"py:class",
+        r"(Path|Callable|Iterable|Sequence|Mapping|Any|Expr|Form|Measure|Constant"
+        r"|Function|FunctionSpace|Mesh|Comm|NDArray|ArrayLike|F64|I32|optional)",
+    ),
 ]

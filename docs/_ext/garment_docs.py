@@ -63,7 +63,9 @@ def _cell(content) -> nodes.entry:
     return entry
 
 
-def make_table(headers: list[str], rows: list[list], widths: list[int] | None = None) -> nodes.table:
+def make_table(
+    headers: list[str], rows: list[list], widths: list[int] | None = None
+) -> nodes.table:
     table = nodes.table(classes=["garment-table"])
     group = nodes.tgroup(cols=len(headers))
     table += group
@@ -167,9 +169,7 @@ class _Validators(ast.NodeVisitor):
         if isinstance(node, ast.Constant) and isinstance(node.value, str):
             return node.value
         if isinstance(node, ast.JoinedStr):
-            return "".join(
-                v.value if isinstance(v, ast.Constant) else "*" for v in node.values
-            )
+            return "".join(v.value if isinstance(v, ast.Constant) else "*" for v in node.values)
         return None
 
     def _plain(self, expr: ast.expr) -> str:
@@ -187,7 +187,7 @@ class _Validators(ast.NodeVisitor):
 
     def _eval(self, expr: ast.expr):
         try:
-            return eval(compile(ast.Expression(expr), "<config>", "eval"), self.namespace)  # noqa: S307
+            return eval(compile(ast.Expression(expr), "<config>", "eval"), self.namespace)
         except Exception:
             return None
 
@@ -222,8 +222,10 @@ def scene_reference_tables() -> list[tuple[str, str, list[str], list[list]]]:
     val = _Validators(config, check)
     hints = typing.get_type_hints(config.Scene)
     sections = [("", config.Scene)]
-    sections += [(f.name, hints[f.name]) for f in fields(config.Scene) if f.name in hints
-                 and isinstance(hints[f.name], type) and hasattr(hints[f.name], "__dataclass_fields__")]  # fmt: skip
+    for f in fields(config.Scene):
+        tp = hints.get(f.name)
+        if isinstance(tp, type) and hasattr(tp, "__dataclass_fields__"):
+            sections.append((f.name, tp))
     out = []
     headers = ["key", "type", "default", "unit", "accepted", "meaning"]
     for section, cls in sections:
@@ -356,7 +358,9 @@ class ExitCodes(SphinxDirective):
         self.env.note_dependency(cli.__file__)
         rows = [[("code", str(c)), [("code", n) for n in ns] or "", m]
                 for c, ns, m in exit_codes()]  # fmt: skip
-        return [make_table(["exit code", "constant", "meaning (from run --help)"], rows, [8, 22, 70])]
+        return [
+            make_table(["exit code", "constant", "meaning (from run --help)"], rows, [8, 22, 70])
+        ]
 
 
 # ------------------------------------------------------------------------------------------------
@@ -518,7 +522,8 @@ def table_shells():
                      f"{r['reference']:.6g}" if "reference" in r else "—",
                      _pct(r.get("rel_error")), r.get("status", "")])  # fmt: skip
     head = ["case", "settings", "element", "n", "dofs", "value", "reference", "error", "status"]
-    note = (f"`benchmarks/results/shells.json`: {len(rows)} runs, {d['meta'].get('ranks')} rank(s), "
+    meta = d["meta"]
+    note = (f"`benchmarks/results/shells.json`: {len(rows)} runs, {meta.get('ranks')} rank(s), "
             f"{d['meta'].get('total_s', 0):.0f} s in all. Cases and the sources of the reference "
             "values: `fenics_garment/verification/shells.py`.")  # fmt: skip
     return head, rows, note
@@ -535,8 +540,10 @@ def table_contact():
                      _pct(r.get("rel_error")), f"{r.get('newton_its', '')}"])  # fmt: skip
     head = ["case", "variant", "contact points", "cells", "dofs", "pressure [Pa]",
             "Laplace [Pa]", "error", "Newton its"]  # fmt: skip
-    note = ("`benchmarks/results/contact.json`: a tight sleeve on a rigid cylinder against "
-            "Laplace's law p = n_θθ / R (`python -m benchmarks contact`).")
+    note = (
+        "`benchmarks/results/contact.json`: a tight sleeve on a rigid cylinder against "
+        "Laplace's law p = n_θθ / R (`python -m benchmarks contact`)."
+    )
     return head, rows, note
 
 
@@ -557,7 +564,9 @@ def table_answers():
         if not rec:
             continue
         ana, runs = rec["analysis"], rec["runs"]
-        label = f"{stem.replace('_', ' ')} ({ana['sizes'][-1] * 1e3:.1f} mm, {ana['dofs'][-1]:,} dofs)"
+        label = (
+            f"{stem.replace('_', ' ')} ({ana['sizes'][-1] * 1e3:.1f} mm, {ana['dofs'][-1]:,} dofs)"
+        )
         for stat, unit in (("sensor_p95", "kPa"), ("mean", "kPa")):
             row = [label if stat == "sensor_p95" else "", f"{stat} [{unit}]"]
             for reg in regions:
@@ -574,11 +583,13 @@ def table_answers():
             row.append(f"{f[-1]:.2f} (range {100 * spread:.1f} %)")
         rows.append(row)
     head = ["scene (finest mesh)", "statistic", *[r.replace("_", " ") for r in regions]]
-    note = ("Records `<scene>:body-0.015` of `benchmarks/results/convergence.json` (the scenes as "
-            "shipped, garment meshes in the ratio 1/√2). Each cell: the value on the finest "
-            "garment mesh ± the least-squares error bar of all levels (Eça & Hoekstra, J. Comput. "
-            "Phys. 262 (2014) 104–130); ✓: within the ±3 % target. Force: the region's contact "
-            "force on the finest mesh and its range over the last three meshes.")
+    note = (
+        "Records `<scene>:body-0.015` of `benchmarks/results/convergence.json` (the scenes as "
+        "shipped, garment meshes in the ratio 1/√2). Each cell: the value on the finest "
+        "garment mesh ± the least-squares error bar of all levels (Eça & Hoekstra, J. Comput. "
+        "Phys. 262 (2014) 104–130); ✓: within the ±3 % target. Force: the region's contact "
+        "force on the finest mesh and its range over the last three meshes."
+    )
     return head, rows, note
 
 
@@ -592,14 +603,18 @@ def table_convergence_runs():
         dofs = ana.get("dofs") or [r.get("dofs") for r in rec.get("runs", [])]
         done = ana.get("completed") or [r.get("completed") for r in rec.get("runs", [])]
         met = ana.get("key_sensor_p95_least_squares_met")
-        rows.append([("code", name),
-                     " / ".join(f"{1e3 * s:.1f}" for s in sizes if s),
-                     f"{min(d for d in dofs if d):,} … {max(d for d in dofs if d):,}" if any(dofs) else "",
-                     f"{sum(bool(c) for c in done)} / {len(done)}",
-                     ", ".join(m.replace("_", " ") for m in met) if met else ("none" if met == [] else "—")])  # fmt: skip
-    head = ["record", "garment meshes [mm]", "dofs", "completed", "key regions within ±3 % (sensor p95, least squares)"]  # fmt: skip
-    note = ("All records of `benchmarks/results/convergence.json`; their per-level tables are in "
-            "the benchmark report.")
+        n = [d for d in dofs if d]
+        span = f"{min(n):,} … {max(n):,}" if n else ""
+        verdict = ", ".join(m.replace("_", " ") for m in met) if met else ""
+        verdict = verdict or ("none" if met == [] else "—")
+        rows.append([("code", name), " / ".join(f"{1e3 * s:.1f}" for s in sizes if s), span,
+                     f"{sum(bool(c) for c in done)} / {len(done)}", verdict])  # fmt: skip
+    head = ["record", "garment meshes [mm]", "dofs", "completed",
+            "key regions within ±3 % (sensor p95, least squares)"]  # fmt: skip
+    note = (
+        "All records of `benchmarks/results/convergence.json`; their per-level tables are in "
+        "the benchmark report."
+    )
     return head, rows, note
 
 
@@ -622,7 +637,10 @@ def table_targets():
                      f"{r.get('warm_wall_s', r.get('wall_s', 0)):.0f}",
                      str(r.get("newton_its", "")), str(r.get("status", ""))])  # fmt: skip
     head = ["scene", "garment mesh [mm]", "dofs", "ranks", "warm wall [s]", "Newton its", "status"]
-    note = "`benchmarks/results/targets.json` (`python -m benchmarks.targets`): the shipped demos' own runs."
+    note = (
+        "`benchmarks/results/targets.json` (`python -m benchmarks.targets`): the shipped "
+        "demos' own runs."
+    )
     return head, rows, note
 
 
@@ -638,12 +656,14 @@ RECORD_TABLES = {
 
 class RecordTable(SphinxDirective):
     required_arguments = 1
-    option_spec = {"no-note": directives.flag}
+    option_spec: typing.ClassVar = {"no-note": directives.flag}
 
     def run(self):
         which = self.arguments[0]
         if which not in RECORD_TABLES:
-            raise self.error(f"record-table: unknown table {which!r}; known: {', '.join(RECORD_TABLES)}")
+            raise self.error(
+                f"record-table: unknown table {which!r}; known: {', '.join(RECORD_TABLES)}"
+            )
         for f in RESULTS.glob("*.json"):
             self.env.note_dependency(str(f))
         head, rows, note = RECORD_TABLES[which]()
@@ -696,7 +716,10 @@ def plain_docstring(lines: list[str]) -> None:
             block_indent = None
         if line.rstrip().endswith("::"):
             block_indent = _indent(line)
-        if "|" in line and not line.lstrip().startswith(("|", "+")):
+        bare = line.strip()
+        table = bare.startswith("+") or (bare.startswith("|") and bare.endswith("|")
+                                         and bare.count("|") >= 3)  # fmt: skip
+        if "|" in line and not table:
             parts = _INLINE_LITERAL.split(line)
             lines[i] = "".join(p if k % 2 else p.replace("|", r"\|") for k, p in enumerate(parts))
 
