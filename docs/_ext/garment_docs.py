@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import inspect
 import io
 import json
 import math
@@ -31,6 +32,7 @@ from dataclasses import MISSING, fields
 from pathlib import Path
 
 from docutils import nodes
+from docutils.statemachine import StringList
 from docutils.parsers.rst import directives
 from sphinx.util.docutils import SphinxDirective
 
@@ -51,7 +53,7 @@ def _cell(content) -> nodes.entry:
     para = nodes.paragraph()
     parts = content if isinstance(content, list) else [content]
     for i, part in enumerate(parts):
-        if i:
+        if i and not isinstance(part, nodes.Node):
             para += nodes.Text(" ")
         if isinstance(part, tuple) and part[0] == "code":
             para += nodes.literal(text=str(part[1]))
@@ -258,25 +260,38 @@ def scene_reference_tables() -> list[tuple[str, str, list[str], list[list]]]:
                 accepted.append(f"[{rng[0]:g}, {rng[1]:g}] {rng[2]} ({rng[3]})")
                 if key in config.ZERO_MEANS_DEFAULT:
                     accepted.append("or 0")
-            for cond in val.conditions.get(key, []):
+            for cond in dict.fromkeys(val.conditions.get(key, [])):
                 accepted.append(("code", cond))
             for i, names in enumerate(val.subkeys.get(key, [])):
                 accepted.append("keys:" if i == 0 else "or (another kind) keys:")
                 accepted += [("code", n) for n in names]
             for k, conds in val.conditions.items():
                 if k.startswith(key + ".") and k != key:
-                    accepted += [f"{k}:", *[("code", c) for c in conds]]
+                    accepted += [f"{k}:", *[("code", c) for c in dict.fromkeys(conds)]]
             rows.append([
                 ("code", key),
                 config._type_name(tp),
-                ("code", config._toml_value(default)) if default is not None else "",
+                ("code", config._toml_value(default).replace("{  }", "{}"))
+                if default is not None
+                else "",
                 unit,
                 accepted or "",
                 note,
             ])  # fmt: skip
-        doc = " ".join((cls.__doc__ or "").split()) if section else ""
+        doc = inspect.cleandoc(cls.__doc__ or "") if section else ""
         out.append((section or "top level", doc, headers, rows))
     return out
+
+
+_ROLE = re.compile(r":(\w+):`([^`]+)`")
+
+
+def rst_to_myst(text: str) -> str:
+    """The package's docstring and comment markup for a MyST page (these directives sit on
+    Markdown pages): roles :x:`y` as {x}`y`, "|" escaped (a table cell and a substitution
+    otherwise)."""
+    text = _ROLE.sub(lambda m: "{%s}`%s`" % (m.group(1), m.group(2)), text)
+    return text.replace("|", "\\|")
 
 
 class SceneReference(SphinxDirective):
@@ -286,13 +301,20 @@ class SceneReference(SphinxDirective):
         from fenics_garment.scene import config
 
         self.env.note_dependency(config.__file__)
+        self.env.note_dependency(__file__)
         result = []
         for section, doc, headers, rows in scene_reference_tables():
             sid = nodes.make_id(f"scene-{section}")
             sec = nodes.section(ids=[sid])
             sec += nodes.title(text=f"[{section}]" if section != "top level" else section)
             if doc and not doc.startswith(f"{section.capitalize()}Config("):
-                sec += nodes.paragraph(text=doc)
+                holder = nodes.container()
+                self.state.nested_parse(StringList(rst_to_myst(doc).splitlines(), "config.py"),
+                                        0, holder)  # fmt: skip
+                sec += holder.children
+            for row in rows:  # the field comments: ``code`` and roles, as in docstrings
+                parsed, messages = self.state.inline_text(rst_to_myst(row[-1]), self.lineno)
+                row[-1] = [*parsed, *messages]
             sec += make_table(headers, rows, widths=[14, 8, 10, 5, 22, 41])
             result.append(sec)
         return result
@@ -317,6 +339,7 @@ class CliHelp(SphinxDirective):
         from fenics_garment import cli
 
         self.env.note_dependency(cli.__file__)
+        self.env.note_dependency(__file__)
         os.environ["COLUMNS"] = "100"
         parser = cli.build_parser()
         out = []
@@ -666,6 +689,7 @@ class RecordTable(SphinxDirective):
             )
         for f in RESULTS.glob("*.json"):
             self.env.note_dependency(str(f))
+        self.env.note_dependency(__file__)
         head, rows, note = RECORD_TABLES[which]()
         out = [make_table(head, rows)]
         if "no-note" not in self.options:
