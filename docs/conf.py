@@ -25,6 +25,7 @@ extensions = [
     "sphinx.ext.autodoc",
     "sphinx.ext.autosummary",
     "sphinx.ext.mathjax",
+    "sphinx-mathjax-offline",  # MathJax 3 copied into _static/: the pages' math renders offline
     "sphinx.ext.napoleon",
     "sphinx.ext.viewcode",
     "garment_docs",

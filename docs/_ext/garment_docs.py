@@ -32,8 +32,8 @@ from dataclasses import MISSING, fields
 from pathlib import Path
 
 from docutils import nodes
-from docutils.statemachine import StringList
 from docutils.parsers.rst import directives
+from docutils.statemachine import StringList
 from sphinx.util.docutils import SphinxDirective
 
 DOCS = Path(__file__).resolve().parents[1]
@@ -290,7 +290,7 @@ def rst_to_myst(text: str) -> str:
     """The package's docstring and comment markup for a MyST page (these directives sit on
     Markdown pages): roles :x:`y` as {x}`y`, "|" escaped (a table cell and a substitution
     otherwise)."""
-    text = _ROLE.sub(lambda m: "{%s}`%s`" % (m.group(1), m.group(2)), text)
+    text = _ROLE.sub(lambda m: "{" + m.group(1) + "}`" + m.group(2) + "`", text)
     return text.replace("|", "\\|")
 
 
