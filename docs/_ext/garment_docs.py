@@ -305,8 +305,9 @@ class SceneReference(SphinxDirective):
         result = []
         for section, doc, headers, rows in scene_reference_tables():
             sid = nodes.make_id(f"scene-{section}")
-            sec = nodes.section(ids=[sid])
+            sec = nodes.section(ids=[sid], names=[sid])
             sec += nodes.title(text=f"[{section}]" if section != "top level" else section)
+            self.state.document.note_explicit_target(sec)  # a label: {ref}`scene-body` etc.
             if doc and not doc.startswith(f"{section.capitalize()}Config("):
                 holder = nodes.container()
                 self.state.nested_parse(StringList(rst_to_myst(doc).splitlines(), "config.py"),
