@@ -45,6 +45,8 @@ napoleon_google_docstring = True
 napoleon_numpy_docstring = False
 napoleon_use_ivar = True
 
+smartquotes = False  # keep "--resume", quotes and dashes as the program prints them
+
 html_theme = "furo"
 html_title = f"fenics-garment {release}"
 html_static_path = []

@@ -540,7 +540,8 @@ def table_shells():
     d = _load("shells.json")
     rows = []
     for r in d["runs"]:
-        extra = ", ".join(f"{k} = {v}" for k, v in (r.get("extra") or {}).items())
+        extra = ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
+                          for k, v in (r.get("extra") or {}).items())  # fmt: skip
         rows.append([("code", r["case"]), extra, r.get("variant", ""), str(r.get("n", "")),
                      f"{r.get('dofs', 0):,}", f"{r['value']:.6g}" if "value" in r else "—",
                      f"{r['reference']:.6g}" if "reference" in r else "—",
