@@ -6,6 +6,7 @@ import re
 import subprocess
 import sys
 import time
+from dataclasses import fields
 from html.parser import HTMLParser
 from pathlib import Path
 from urllib.parse import unquote, urlsplit
@@ -134,10 +135,15 @@ def test_the_site_builds_offline_without_warnings_and_its_links_resolve(tmp_path
     scene = (out / "reference" / "scene.html").read_text()
     from fenics_garment.scene import config
 
-    for key in config.LENGTH_RANGES:  # the generated reference names every ranged key
+    for section in ("body", "garment", "physics", "dressing", "solver", "output"):
+        for f in fields(getattr(config.Scene(), section)):  # every key, from the dataclasses
+            assert f">{section}.{f.name}<" in scene, f"{section}.{f.name}"
+    for key in config.LENGTH_RANGES:
         assert key in scene, key
     bad = broken_local_links(out)
     assert not bad, "broken local links:\n" + "\n".join(bad[:40])
+    leaks = [p.name for p in out.rglob("*.html") if str(ROOT) in p.read_text(errors="replace")]
+    assert not leaks, f"pages naming the checkout's absolute path: {leaks}"
     remote = {u for page in out.rglob("*.html") for u in _parse(page).remote}
     assert not remote, f"pages load from the network (not offline): {sorted(remote)[:10]}"
     print(f"docs built in {wall:.0f} s")

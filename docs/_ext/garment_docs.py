@@ -754,12 +754,22 @@ def _process_docstring(app, what, name, obj, options, lines):
     plain_docstring(lines)
 
 
+def _no_machine_paths(app, doctree, docname):
+    """Values autodoc prints (``SCENES = Path(__file__)…``) hold this checkout's absolute path:
+    written as ``<repository>`` instead, so that no page names a path of the building machine."""
+    root = str(ROOT)
+    for text in list(doctree.findall(nodes.Text)):
+        if root in text:
+            text.parent.replace(text, nodes.Text(str(text).replace(root, "<repository>")))
+
+
 def _start_xref_log(app):
     (Path(app.outdir).parent / "docstring-xrefs.txt").write_text("")
 
 
 def setup(app):
     app.connect("builder-inited", _start_xref_log)
+    app.connect("doctree-resolved", _no_machine_paths)
     app.connect("autodoc-process-docstring", _process_docstring, priority=600)
     app.connect("missing-reference", _docstring_xref)
     app.add_directive("scene-reference", SceneReference)
