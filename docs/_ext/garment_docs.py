@@ -593,12 +593,13 @@ def table_answers():
             f"{stem.replace('_', ' ')} ({ana['sizes'][-1] * 1e3:.1f} mm, {ana['dofs'][-1]:,} dofs)"
         )
         for stat, unit in (("sensor_p95", "kPa"), ("mean", "kPa")):
-            row = [label if stat == "sensor_p95" else "", f"{stat} [{unit}]"]
+            row = [label if stat == "sensor_p95" else "", f"{stat.replace('_', ' ')} [{unit}]"]
             for reg in regions:
                 ls = ana["regions"][reg][stat]["least_squares"]
                 v, e, rel = ls["values"][-1], ls["error"][-1], ls["relative_error"][-1]
                 ok = " ✓" if rel <= 0.03 else ""
-                row.append(f"{v:.3f} ± {e:.3f} ({100 * rel:.1f} %){ok}")
+                pct = f"{100 * rel:.1f}" if rel < 0.1 else f"{100 * rel:.0f}"
+                row.append(f"{v:.3f} ± {e:.3f} ({pct} %){ok}")
             rows.append(row)
         last = [r for r in runs if r.get("completed")][-3:]
         row = ["", "force [N]"]
