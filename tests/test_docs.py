@@ -59,6 +59,30 @@ def test_every_output_file_is_described():
         assert f"`{name}" in readme, f"the README's outputs table does not list {name}"
 
 
+def _blocks(path: Path, lang: str) -> list[str]:
+    return re.findall(rf"^```{lang}\n(.*?)^```", path.read_text(), flags=re.M | re.S)
+
+
+@pytest.mark.parametrize("page", [README, DOCS / "guide" / "scenes.md"], ids=lambda p: p.name)
+def test_the_quickstart_scenes_are_valid(page):
+    """The TOML of the quickstarts loads as a scene (names, types, ranges), and the Python
+    quickstart imports names that exist."""
+    import importlib
+    import tomllib
+
+    from fenics_garment.scene import config
+
+    tomls = _blocks(page, "toml")
+    assert tomls
+    for text in tomls:
+        config.from_dict(tomllib.loads(text), f"{page.name} quickstart")
+    for code in _blocks(page, "python"):
+        for m in re.finditer(r"^from ([\w.]+) import (.+)$", code, flags=re.M):
+            module = importlib.import_module(m.group(1))
+            for name in m.group(2).split(","):
+                assert hasattr(module, name.strip()), f"{m.group(1)}.{name.strip()}"
+
+
 class _Links(HTMLParser):
     def __init__(self):
         super().__init__()
