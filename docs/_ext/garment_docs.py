@@ -733,7 +733,8 @@ def plain_docstring(lines: list[str]) -> None:
             j = i + 1
             while j < n and not lines[j].strip():
                 j += 1
-            if j > i + 1 and j < n and _indent(lines[j]) > _indent(a):
+            nested_list = j < n and re.match(r"\s*([*+-]|\d+\.)\s", lines[j])
+            if j > i + 1 and j < n and _indent(lines[j]) > _indent(a) and not nested_list:
                 lines[i] = a + ":"
     block_indent = None
     for i, line in enumerate(lines):
@@ -744,8 +745,9 @@ def plain_docstring(lines: list[str]) -> None:
         if line.rstrip().endswith("::"):
             block_indent = _indent(line)
         bare = line.strip()
-        table = bare.startswith("+") or (bare.startswith("|") and bare.endswith("|")
-                                         and bare.count("|") >= 3)  # fmt: skip
+        table = re.fullmatch(r"\+[-=+]+\+", bare) or (
+            bare.startswith("|") and bare.endswith("|") and bare.count("|") >= 3
+        )
         if "|" in line and not table:
             parts = _INLINE_LITERAL.split(line)
             lines[i] = "".join(p if k % 2 else p.replace("|", r"\|") for k, p in enumerate(parts))
