@@ -140,7 +140,8 @@ def broken_local_links(html_root: Path) -> list[str]:
 def test_the_site_builds_offline_without_warnings_and_its_links_resolve(tmp_path):
     """``make docs`` as CI runs it: nitpicky (-n), warnings as errors (-W), a clean build (fresh
     output and doctree folders), nothing loaded from the network (MathJax ships with the site).
-    Measured 2026-12-07 on the shared 2-core machine (load 5–8): 58–91 s."""
+    Measured 2026-12-07 on the shared 2-core machine: ~32 s of CPU; 97–155 s wall under the
+    load of two other developers' simulations (load average 6–9)."""
     # the `docs` extra (`make docs` and `make test-slow` install it; the Docker image has not)
     for module in ("sphinx", "myst_parser", "furo", "jupytext"):
         pytest.importorskip(module)
