@@ -76,4 +76,10 @@ nitpick_ignore_regex = [
         r"(Path|Callable|Iterable|Sequence|Mapping|Any|Expr|Form|Measure|Constant"
         r"|Function|FunctionSpace|Mesh|Comm|NDArray|ArrayLike|F64|I32|optional)",
     ),
+    # Python's built-in types (no intersphinx to the Python docs: offline)
+    (
+        r"py:(class|obj|exc)",
+        r"(float|int|str|bool|None|dict|list|tuple|set|object|bytes|type|callable|Exception"
+        r"|ValueError|RuntimeError|TypeError|OSError|KeyError|TimeoutError)",
+    ),
 ]

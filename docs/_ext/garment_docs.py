@@ -709,6 +709,10 @@ def _docstring_xref(app, env, node, contnode):
     the docstrings are the package's, the pages' own references stay nitpicky)."""
     if node.get("refdomain") != "py" or not env.docname.startswith("reference/"):
         return None
+    kind, target = f"py:{node.get('reftype')}", node.get("reftarget", "")
+    for kind_re, target_re in app.config.nitpick_ignore_regex:  # other projects' types
+        if re.fullmatch(kind_re, kind) and re.fullmatch(target_re, target):
+            return None
     log = Path(app.outdir).parent / "docstring-xrefs.txt"
     with log.open("a") as f:
         f.write(f"{env.docname}: {node.get('reftype')} {node.get('reftarget')}\n")
