@@ -51,7 +51,8 @@ smartquotes = False  # keep "--resume", quotes and dashes as the program prints 
 
 html_theme = "furo"
 html_title = f"fenics-garment {release}"
-html_static_path = []
+html_static_path = ["_static"]
+html_css_files = ["garment.css"]
 html_show_sourcelink = False
 html_last_updated_fmt = None
 

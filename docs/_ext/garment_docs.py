@@ -48,8 +48,17 @@ GENERATED = DOCS / "demos" / "generated"
 
 
 def _cell(content) -> nodes.entry:
-    """A table cell: a string, ("code", s), or a list of those (joined by spaces)."""
+    """A table cell: a string, ("code", s), or a list of those (joined by spaces); or a
+    tuple ("blocks", [paragraph, ...]) of ready body elements."""
     entry = nodes.entry()
+    if isinstance(content, tuple) and content[0] == "blocks":
+        entry.extend(content[1])
+        return entry
+    entry += _para(content)
+    return entry
+
+
+def _para(content) -> nodes.paragraph:
     para = nodes.paragraph()
     parts = content if isinstance(content, list) else [content]
     for i, part in enumerate(parts):
@@ -61,8 +70,7 @@ def _cell(content) -> nodes.entry:
             para += part
         else:
             para += nodes.Text(str(part))
-    entry += para
-    return entry
+    return para
 
 
 def make_table(
@@ -313,10 +321,16 @@ class SceneReference(SphinxDirective):
                 self.state.nested_parse(StringList(rst_to_myst(doc).splitlines(), "config.py"),
                                         0, holder)  # fmt: skip
                 sec += holder.children
-            for row in rows:  # the field comments: ``code`` and roles, as in docstrings
-                parsed, messages = self.state.inline_text(rst_to_myst(row[-1]), self.lineno)
-                row[-1] = [*parsed, *messages]
-            sec += make_table(headers, rows, widths=[14, 8, 10, 5, 22, 41])
+            merged = []
+            for *first, accepted, note in rows:
+                # the field comment (``code`` and roles, as in docstrings), then what is accepted
+                parsed, messages = self.state.inline_text(rst_to_myst(note), self.lineno)
+                blocks = [nodes.paragraph("", "", *parsed), *messages] if note else []
+                if accepted:
+                    blocks.append(_para([nodes.emphasis(text="Accepted:"), *accepted]))
+                merged.append([*first, ("blocks", blocks)])
+            head = [*headers[:-2], "meaning; accepted values"]
+            sec += make_table(head, merged, widths=[16, 9, 10, 5, 60])
             result.append(sec)
         return result
 
