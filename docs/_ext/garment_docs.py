@@ -556,11 +556,18 @@ def table_shells():
     for r in d["runs"]:
         extra = ", ".join(f"{k} = {v:.6g}" if isinstance(v, float) else f"{k} = {v}"
                           for k, v in (r.get("extra") or {}).items())  # fmt: skip
-        rows.append([("code", r["case"]), extra, r.get("variant", ""), str(r.get("n", "")),
-                     f"{r.get('dofs', 0):,}", f"{r['value']:.6g}" if "value" in r else "—",
+        status = r.get("status", "")
+        if status != "ok" and r.get("error"):
+            why = re.sub(r"/(root|home/[^/\s]+)\b", "~", str(r["error"]).strip().splitlines()[-1])
+            status = f"{status}: {why[:120]}"  # (no home folder of the measuring machine)
+        solver = r.get("solver", "") + (f", {r['steps']} steps" if r.get("steps") else "")
+        rows.append([("code", r["case"]), extra, r.get("variant", ""), solver,
+                     str(r.get("n", "")), f"{r.get('dofs', 0):,}",
+                     f"{r['value']:.6g}" if "value" in r else "—",
                      f"{r['reference']:.6g}" if "reference" in r else "—",
-                     _pct(r.get("rel_error")), r.get("status", "")])  # fmt: skip
-    head = ["case", "settings", "element", "n", "dofs", "value", "reference", "error", "status"]
+                     _pct(r.get("rel_error")), status])  # fmt: skip
+    head = ["case", "settings", "element", "solver, load steps", "n", "dofs", "value",
+            "reference", "error", "status"]  # fmt: skip
     meta = d["meta"]
     note = (f"`benchmarks/results/shells.json`: {len(rows)} runs, {meta.get('ranks')} rank(s), "
             f"{d['meta'].get('total_s', 0):.0f} s in all. Cases and the sources of the reference "
