@@ -381,7 +381,7 @@ def exit_codes() -> list[tuple[int, list[str], str]]:
                 names.setdefault(v, []).append(f"{mod.__name__.split('.', 1)[1]}.{k}")
     os.environ["COLUMNS"] = "100"
     desc = " ".join(_subparsers(cli.build_parser())["run"].description.split())
-    text = desc.split("Exit codes:", 1)[1].strip().rstrip(".")
+    text = desc.split("Exit codes:", 1)[-1].strip().rstrip(".") if "Exit codes:" in desc else ""
     meaning = {int(m.group(1)): m.group(2) for m in re.finditer(r"(\d+) (.*?)(?=; \d+ |$)", text)}
     codes = sorted(set(names) | set(meaning))
     return [(c, names.get(c, []), meaning.get(c, "")) for c in codes]
