@@ -9,7 +9,7 @@
 # (no image registry is needed). To move to a newer sid, bootstrap a new date tag and change
 # this line and BASE_IMAGE in .ci/docker-check together.
 #
-# Build and run (see the README's "Docker" section):
+# Build and run (see docs/guide/install.md, "Docker image"):
 #     docker build -t fenics-garment:0.1.0 .
 #     docker run --rm -v "$PWD/out:/home/garment/output" fenics-garment:0.1.0
 FROM debian:sid-20261123

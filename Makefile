@@ -6,10 +6,11 @@ VENV      := .venv
 PY        := $(VENV)/bin/python
 MPIEXEC   := $(VENV)/bin/mpiexec
 STAMP     := $(VENV)/.installed-stamp
+DOCS_STAMP := $(VENV)/.docs-stamp
 NP        ?= 2
 PYTEST    := $(PY) -m pytest
 
-.PHONY: demo test test-serial test-mpi test-slow chromium lint bench docker-check clean-venv help
+.PHONY: demo test test-serial test-mpi test-slow chromium lint bench docs docker-check clean-venv help
 
 help:
 	@echo "make demo          run the main demo (creates .venv on first use)"
@@ -18,6 +19,7 @@ help:
 	@echo "make test-slow     the slow-marked runs (scenes, stress, long benchmarks); CI runs both"
 	@echo "make lint          ruff check + format check"
 	@echo "make bench         run the benchmark suite (writes benchmarks/results/)"
+	@echo "make docs          build the documentation site offline into docs/_build/html"
 	@echo "make docker-check  build the Docker image locally and run the tests inside it"
 
 $(PY):
@@ -29,6 +31,12 @@ $(PY):
 $(STAMP): pyproject.toml | $(PY)
 	$(PY) -m pip install --quiet -e ".[dev,plot]"
 	@touch $(STAMP)
+
+# The documentation tools (the `docs` extra), installed on first use of `make docs` or
+# `make test-slow` (whose tests/test_docs.py builds the site).
+$(DOCS_STAMP): pyproject.toml | $(STAMP)
+	$(PY) -m pip install --quiet -e ".[dev,plot,docs]"
+	@touch $(DOCS_STAMP)
 
 demo: $(STAMP)
 	$(MPIEXEC) -n $(NP) $(VENV)/bin/fenics-garment demo
@@ -43,7 +51,7 @@ test-mpi: $(STAMP)
 
 # The verification runs that take 20 s to 2 min each (full scenes, load-step and mesh stress
 # tests, the long shell benchmarks): kept out of the default run's 15 minutes, run by CI after it.
-test-slow: $(STAMP) chromium
+test-slow: $(STAMP) $(DOCS_STAMP) chromium
 	$(PYTEST) -m "slow and not mpi" tests
 
 # Chromium and its driver for the report's browser test (tests/test_report_browser.py), from
@@ -62,6 +70,12 @@ lint: $(STAMP)
 
 bench: $(STAMP)
 	$(PY) -m benchmarks
+
+# Offline (no intersphinx, no downloads), nitpicky, warnings as errors; pages and tables that
+# come from the code and benchmarks/results/ are generated on the way (docs/_ext/garment_docs.py).
+docs: $(DOCS_STAMP)
+	$(PY) -m sphinx -b html -n -W --keep-going -q docs docs/_build/html
+	@echo "docs: open docs/_build/html/index.html"
 
 docker-check:
 	bash .ci/docker-check

@@ -139,7 +139,7 @@ def say(text: str) -> None:
 #
 # The baseline run keeps the default laws. Its residual discretisation error (the garment's
 # curved P2 reference mesh at 2 cm on the smooth body: about −0.2 % in pressure,
-# README "Verification") is shared by every variant, so each variant is checked twice: against
+# docs/verification/shells.md) is shared by every variant, so each variant is checked twice: against
 # its analytic pressure directly, and by its *change* from the baseline — a ratio for a law
 # that scales the hoop tension, a difference for an added pressure — against the change the
 # analytic solution predicts.

@@ -440,7 +440,7 @@ LIMB_SCENES = {
 
 
 #: Known failure: the scan stocking's ankle band is +29 % from Laplace (3760 against 2920 Pa,
-#: 2026-12-04; calf +22 %, knee +15 %). Diagnosed so far (README, "Your own body scan"):
+#: 2026-12-04; calf +22 %, knee +15 %). Diagnosed so far (docs/guide/scan.md, "Your own body scan"):
 #: * fixed: the stocking lofted through its 6 levels alone was not at the levels' ease between
 #:   them (−8 % at the ankle, −0.6 % half-way to the calf, −9 % in the ankle band); it is now
 #:   lofted through the leg's own sections every 2 cm (garments._follow_the_limb), its ease

@@ -24,7 +24,8 @@ def test_stick_stiffness_is_the_skins():
     depth = s.body.tissue_depth
     shear_modulus = BODY_MODULUS_PA / (2 * (1 + BODY_POISSON))  # seed paper Table 1: E, ν
     assert build.stick_stiffness(s) == pytest.approx(shear_modulus / depth, rel=1e-12)
-    assert BODY_MODULUS_PA / (2 * 1.3 * 0.02) == pytest.approx(3.866e5, rel=1e-3)  # README: 3.9e5
+    # docs/theory/dressing.md quotes 3.9e5
+    assert BODY_MODULUS_PA / (2 * 1.3 * 0.02) == pytest.approx(3.866e5, rel=1e-3)
     given = replace(s, physics=replace(s.physics, stick_stiffness=1e6))
     assert build.stick_stiffness(given) == 1e6
 

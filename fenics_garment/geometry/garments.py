@@ -79,8 +79,9 @@ class EdgeRefinement:
     to h at the distance ``band`` [m] from them. With ``ratio`` fixed, a mesh sequence in h
     refines the edges and the rest alike (the convergence study's size ratio holds everywhere).
     Where an armhole passes over the body's side below the shoulder the pressure concentrates in
-    a patch of a few centimetres that uniform meshes do not resolve (README, "Armhole-graded
-    meshes": the dress's upper chest +7.2 % at its last uniform level, +1.7 % graded).
+    a patch of a few centimetres that uniform meshes do not resolve
+    (docs/verification/convergence.md, "Armhole-graded meshes": the dress's upper chest +7.2 %
+    at its last uniform level, +1.7 % graded).
     """
 
     edges: tuple[str, ...] = ("armhole",)
@@ -1068,7 +1069,7 @@ def _follow_the_limb(
     the MakeHuman leg): the stocking's ease went from −8 % at the ankle to −0.6 % half-way to the
     calf and back to −8 % (its pressure 3.7 → 0.27 → 1.9 kPa), and the ankle band, between
     the loft's dip towards the hem (whose section copied the ankle's while the heel widens
-    under it) and the slow rise above, was at −9 % (measured; README, "Your own body scan").
+    under it) and the slow rise above, was at −9 % (measured; docs/guide/scan.md).
     The end sections are the limb's own there too, where the plane meets the limb alone."""
     if limb is None:
         return levels

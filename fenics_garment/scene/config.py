@@ -206,7 +206,8 @@ class DressingConfig:
     #: multipliers) stop at the solver's snes_rtol (1e-8) times that scale. Those path solves
     #: need not reach round-off: only the final state is the answer. Cotton gilet (137,460 /
     #: 36,948 dofs): 39 / 41 Newton iterations in all against 83 / 73 with every solve at 1e-8
-    #: (with release_multipliers), key-region sensor p95 within 0.2 % (README, "Fast scenes")
+    #: (with release_multipliers), key-region sensor p95 within 0.2 %
+    #: (docs/verification/performance.md, "Fast scenes")
     path_tolerance: float = 1e-4
     #: update the augmented-Lagrangian multipliers after every release solve with a spring (not
     #: before the c = 0 one), so that they converge while the spring is released and fewer

@@ -293,7 +293,7 @@ def element_warning(variant) -> str | None:
     if variant.verified:
         return None
     return (f"WARNING: element {variant.name} is a draft option, not verified: it locks in "
-            f"bending on thin shells (README, 'Shell element'); the verified element is "
+            f"bending on thin shells (docs/verification/shells.md); the verified element is "
             f"{DEFAULT_ELEMENT}")  # fmt: skip
 
 

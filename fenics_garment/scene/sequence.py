@@ -26,7 +26,7 @@ What is carried over (:func:`carry_over`):
 With friction the answer depends on the path; here the path is the coarse mesh's and the fine
 level adds its own short release, so a sequenced answer is a different (path) discretisation
 of the same problem. How far it moves the regions' pressures is measured against the direct
-dressing on the same mesh (README, "Mesh sequencing").
+dressing on the same mesh (docs/verification/performance.md, "Mesh sequencing").
 """
 
 from __future__ import annotations

@@ -66,7 +66,7 @@ ELEMENTS: dict[str, ElementVariant] = {
         ElementVariant("P2B-P2B-full", 2, True, 2, 4, 4, psri=False, theta_bubble=True),  # study
         ElementVariant("P2B-P2-full", 2, True, 2, 4, 4, psri=False),  # no locking cure: for study
         ElementVariant("Q2-Q2", 2, False, 2, 5, 3),  # quadrilaterals
-        ElementVariant("P1-P1", 1, False, 1, 2, 1),  # draft: locks in bending (README)
+        ElementVariant("P1-P1", 1, False, 1, 2, 1),  # draft: locks (docs/verification/shells.md)
     )
 }
 
