@@ -78,8 +78,9 @@ def format_line(state: State, now: float) -> str:
     """The progress line of ``state`` at clock ``now``, e.g. ``dressing: step 3/11 (shrink) ·
     spring c 6.2e+03 Pa/m · Newton 2, ‖F‖ 3.5e-02 · 12 s, ~25 s left``."""
     parts = [state.stage]
+    over = bool(state.total) and state.step > state.total  # cut steps added to the plan
     if state.total:
-        step = f"step {state.step}/{state.total}"
+        step = f"step {state.step}" + (f", {state.total} planned" if over else f"/{state.total}")
         parts[0] += f": {step}" + (f" ({state.what})" if state.what else "")
     if state.spring is not None:
         parts.append(f"spring c {state.spring:.2g} Pa/m")
@@ -87,7 +88,7 @@ def format_line(state: State, now: float) -> str:
         its = f"Newton {state.newton}"
         parts.append(its + (f", ‖F‖ {state.residual:.1e}" if state.residual is not None else ""))
     elapsed = now - state.started
-    left = time_left(elapsed, state.step, state.total)
+    left = None if over else time_left(elapsed, state.step, state.total)
     parts.append(format_duration(elapsed) + (f", ~{format_duration(left)} left" if left else ""))
     return " · ".join(parts)
 

@@ -136,3 +136,10 @@ def test_a_silent_stage_gets_a_plain_line(monkeypatch):
     assert (
         out.getvalue().splitlines()[0] == f"  [meshing · {format_duration(progress.PLAIN_EVERY)}]"
     )
+
+
+def test_steps_past_the_plan_are_not_shown_as_a_fraction_above_one():
+    """Cut steps add to the planned count: "step 22, 19 planned", with no time-left estimate
+    (the pace of the plan no longer says how long the rest takes), not "step 22/19"."""
+    line = progress.format_line(progress.State(stage="dressing", step=22, total=19), now=60.0)
+    assert "step 22, 19 planned" in line and "/19" not in line and "left" not in line
