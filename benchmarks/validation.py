@@ -10,6 +10,9 @@ elastica, on n × 1 cell pairs for each ``--n``.
 ``verification/contact.py``) on the Laplace tube, against the curve's hoop tension at the
 wrapped strain, beside the quadratic law with the curve's initial slope.
 
+``anticlastic``: the plate-vs-beam effect at ν = 0.3: the effective rigidity of isotropic strips
+of growing width against the plate's D (beam 1 − ν², cylindrical bending 1).
+
 ``fabrics``: the ASTM D1388 bending length c (41.5° cantilever, 25 mm wide strip, standard
 gravity) the model gives for each fabric of ``fenics_garment/data/fabrics_measured.toml``, warp
 and (Petrak only: Matsudaira gives one B) weft, beside Peirce's c = (B/W)^(1/3); and, warp only,
@@ -18,7 +21,7 @@ the 2.5 mm strip that bends as a beam (anticlastic curvature free: D11 − D12²
 Writes ``benchmarks/results/validation.json``; ``table`` prints it as Markdown (the
 "validation" section of REPORT.md, rebuilt by ``python -m benchmarks.report``).
 
-    python -m benchmarks.validation [cantilever] [fabrics] [tube] [table] [--n N ...]
+    python -m benchmarks.validation [PART ...] [--n N ...]    # PART: one of PARTS
 """
 
 from __future__ import annotations
@@ -35,7 +38,9 @@ import numpy as np
 from benchmarks import check_args
 
 RESULTS = Path(__file__).resolve().parent / "results" / "validation.json"
-PARTS = ("cantilever", "fabrics", "tube", "drape", "table")
+PARTS = ("cantilever", "anticlastic", "fabrics", "tube", "drape", "table")
+#: strip widths [m] of the plate-vs-beam study (L = 1 m, h = 0.01 m, ν = 0.3, Γ = 3)
+ANTICLASTIC_WIDTHS = (0.01, 0.03, 0.1, 0.3, 1.0)
 #: first Cusick drape runs (fabric, mesh size [m], imperfection seed): the seed spread and one
 #: mesh refinement on the stiffest Petrak fabric, then a stiff and a limp Matsudaira fabric
 DRAPE_RUNS = (("P-m6", 0.012, 0), ("P-m6", 0.012, 1), ("P-m6", 0.012, 2), ("P-m6", 0.009, 0),
@@ -85,6 +90,24 @@ def run_cantilever(meshes: list[int], say=print) -> list[dict]:
                 f"({100 * p.angle_error:+.3f} %)  {p.wall_s:.1f} s")  # fmt: skip
         say(f"n = {n}: {time.perf_counter() - t0:.1f} s (JIT {st.solver.timings.jit:.1f} s)")
     _store("cantilever", runs, material=str(cantilever.MASTER_MATERIAL), length=1.0, width=0.1)
+    return runs
+
+
+def run_anticlastic(say=print) -> list[dict]:
+    from fenics_garment.verification import cantilever
+
+    runs = []
+    for b in ANTICLASTIC_WIDTHS:
+        t0 = time.perf_counter()
+        nw = max(2, min(8, round(8 * b)))  # cells across: the edge layers need ~√(R h)
+        drop, ratio = cantilever.effective_rigidity(b, n_width=nw)
+        rec = {"case": f"anticlastic b = {b:g}", "width": b, "searle": b**2 / 0.01,
+               "n_width": nw, "drop": drop, "b_eff_over_d": ratio,
+               "wall_s": time.perf_counter() - t0}  # fmt: skip
+        runs.append(rec)
+        say(f"b = {b:5g} m (b²/(L h) = {rec['searle']:6.3g}): δ/L {drop:.5f}, B_eff/D "
+            f"{ratio:.4f} (beam 1 − ν² = 0.91)  {rec['wall_s']:.0f} s")  # fmt: skip
+    _store("anticlastic", runs, nu=0.3, gamma=3.0)
     return runs
 
 
@@ -257,6 +280,22 @@ def markdown(data: dict | None = None) -> str:
                        f"{_pct(r['drop_error'])} | {r['angle']:.6f} | {r['angle_ref']:.6f} | "
                        f"{_pct(r['angle_error'])} | {r['wall_s']:.1f} |")  # fmt: skip
         out.append("")
+    anti = data.get("anticlastic", {}).get("runs", [])
+    if anti:
+        out += ["### Plate or beam: the anticlastic effect at ν = 0.3", "",
+                "Isotropic strip L = 1 m, h = 0.01 m, ν = 0.3 under the self weight Γ = W L³/D = 3 "
+                "(D = E h³/12(1 − ν²), the plate rigidity per unit width); B_eff is the rigidity "
+                "of the heavy elastica that drops as far. A narrow strip curls anticlastically "
+                "and bends as a beam, B_eff = D(1 − ν²) = E h³/12; a wide one is held in "
+                "cylindrical bending, B_eff = D (Searle's parameter b²/(R h), R ~ L).", "",
+                "| width b [m] | b²/(L h) | cells across | δ/L | B_eff/D | time [s] |",
+                "|---" * 6 + "|"]  # fmt: skip
+        for r in anti:
+            out.append(
+                f"| {r['width']:g} | {r['searle']:.3g} | {r['n_width']} | "
+                f"{r['drop']:.5f} | {r['b_eff_over_d']:.4f} | {r['wall_s']:.0f} |"
+            )
+        out.append("")
     fab = data.get("fabrics", {})
     if fab.get("runs"):
         meta = fab.get("meta", {})
@@ -348,9 +387,11 @@ def main(argv: list[str] | None = None) -> int:
     if bad is not None:
         return bad
     meshes = [int(argv[i + 1]) for i, a in enumerate(argv) if a == "--n"] or [8, 16]
-    parts = [a for a in argv if a in PARTS] or ["cantilever", "fabrics", "tube"]
+    parts = [a for a in argv if a in PARTS] or ["cantilever", "anticlastic", "fabrics", "tube"]
     if "cantilever" in parts:
         run_cantilever(meshes)
+    if "anticlastic" in parts:
+        run_anticlastic()
     if "fabrics" in parts:
         run_fabrics()
     if "tube" in parts:

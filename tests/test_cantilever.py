@@ -141,3 +141,15 @@ def test_measured_fabrics_in_si():
     assert a.A11 == pytest.approx(b.A11) and a.A66 == pytest.approx(b.A66)
     petrak = [f for f in fabrics.values() if f.source == "petrak2025"]
     assert np.mean([f.shear for f in petrak]) == pytest.approx(a.A66)
+
+
+@pytest.mark.slow
+def test_plate_and_beam_limits():
+    """ν = 0.3: a narrow strip bends as a beam (B_eff = D(1 − ν²)), a wide one as a plate in
+    cylindrical bending (B_eff → D), B_eff read off the elastica with the same tip drop at
+    Γ = W L³/D = 3. Measured: b = 0.01 m 0.9157 (beam 0.91); b = 1 m 0.9890 (≈ 20 s)."""
+    _, narrow = cantilever.effective_rigidity(0.01, n_width=2)
+    _, wide = cantilever.effective_rigidity(1.0, n_width=8)
+    print(f"B_eff/D: b = 0.01 m {narrow:.4f}, b = 1 m {wide:.4f}")
+    assert abs(narrow / (1 - 0.3**2) - 1) < 0.01
+    assert 0.98 < wide < 1.0

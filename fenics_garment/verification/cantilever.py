@@ -37,6 +37,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 from scipy.integrate import solve_bvp
+from scipy.optimize import brentq
 
 from fenics_garment import units
 from fenics_garment._stack import MPI
@@ -251,6 +252,28 @@ def master_curve(
         st.stepper.run(st.load_factor_for(g))
         out.append(CurvePoint(g, st.tip(), heavy_elastica(g), time.perf_counter() - t0))
     return out, st
+
+
+def effective_rigidity(
+    width: float,
+    *,
+    nu: float = 0.3,
+    gamma: float = 3.0,
+    n: int = 16,
+    n_width: int = 4,
+    comm=MPI.COMM_WORLD,
+) -> tuple[float, float]:
+    """The plate-vs-beam (anticlastic) effect: an isotropic strip L = 1 m, h = 0.01 m of width
+    ``width`` and Poisson ratio ``nu`` under the self weight of Γ = W L³/D = ``gamma`` (D the
+    plate rigidity E h³/12(1 − ν²)). Returns (tip drop δ/L, B_eff/D) with B_eff the rigidity of
+    the elastica that drops as far (1 for cylindrical bending, 1 − ν² for a beam)."""
+    mat = Isotropic(E=1.2e6, nu=nu, thickness=0.01, density=100.0, name="strip")
+    st = strip(mat, 1.0, width, gamma_max=gamma, n=n, n_width=n_width, comm=comm)
+    st.stepper.run(1.0)
+    drop = st.tip().tip_drop
+    g_eff = brentq(lambda g: heavy_elastica(g).tip_drop - drop, 0.3 * gamma, 3.0 * gamma,
+                   xtol=1e-10)  # fmt: skip
+    return drop, gamma / g_eff
 
 
 # ---------------------------------------------------------------------------------------------
