@@ -49,7 +49,8 @@ from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ShellModel
 from fenics_garment.solve import LoadStepper, NonlinearSolver
 
-#: ASTM D1388 (stiffness of fabrics), option A (cantilever test): the tip-to-clamp line at 41.5° below horizontal.
+#: ASTM D1388 (stiffness of fabrics), option A (cantilever): the tip-to-clamp line at 41.5°
+#: below the horizontal.
 ASTM_D1388_ANGLE_DEG = 41.5
 #: ASTM D1388 specimen width, 25 mm (its length, 200 mm, only bounds the overhang).
 ASTM_D1388_WIDTH = 0.025

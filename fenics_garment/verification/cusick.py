@@ -11,7 +11,11 @@ fold by a seeded, stress-free imperfection of the specimen's shape — a vertica
 a Σₖ cos(kφ + φₖ)·((r − r_p)/(r_s − r_p))², k = 2 … 12, random phases from ``seed`` — and
 the self weight is applied in load steps. How DC and the node count depend on that choice
 (amplitude, seed) and on the mesh is what :func:`drape` reports; it is not yet a converged or
-validated value.
+validated value. Measured (P-m6, P2B-P2B, ``benchmarks/validation.py drape``): DC 0.512 /
+0.464 / 0.426 on 12 / 9 / 6 mm meshes (10 nodes on each) — not converged: a fold's radius is of
+the order of the bending length c ≈ 1–2 cm, which these meshes resolve with a few cells only;
+seeds 0 / 1 / 2 at 12 mm: 0.512 / 0.529 / 0.520 (10 / 11 / 11 nodes); amplitude 0.3 / 1 /
+3 mm: 0.527 / 0.512 / 0.511 (11 / 10 / 10 nodes).
 
 Outputs as the instrument: the drape coefficient DC = (A_shadow − A_p)/(A_s − A_p) from the
 area of the union of the deformed triangles projected on the horizontal plane
