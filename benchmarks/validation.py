@@ -112,7 +112,7 @@ def run_anticlastic(say=print) -> list[dict]:
     runs = []
     for b in ANTICLASTIC_WIDTHS:
         t0 = time.perf_counter()
-        nw = max(2, min(8, round(8 * b)))  # cells across: the edge layers need ~√(R h)
+        nw = max(2, min(12, math.ceil(b / 0.04)))  # cells across: edge layers ~√(R h) = 0.1 m
         drop, ratio = cantilever.effective_rigidity(b, n_width=nw)
         rec = {"case": f"anticlastic b = {b:g}", "width": b, "searle": b**2 / 0.01,
                "n_width": nw, "drop": drop, "b_eff_over_d": ratio,
