@@ -12,7 +12,9 @@ tens of minutes). ``scenes`` (gilet cost growth, 1 vs 2 ranks, skips on/off, the
 peer, the stress table; ``benchmarks/scenes.py``) runs only when named, e.g.
 ``python -m benchmarks scenes`` or ``python -m benchmarks scenes growth peer``. ``solvers``
 (direct MUMPS, MUMPS block low-rank and CG + GAMG against mesh size on the Scordelis–Lo roof, 1
-and 2 ranks, and a cost model; ``benchmarks/solvers.py``) likewise runs only when named.
+and 2 ranks, and a cost model; ``benchmarks/solvers.py``) likewise runs only when named, and so
+does ``validation`` (heavy elastica, plate or beam, fabrics' bending lengths, the tension–strain
+law's tube; ``benchmarks/validation.py``, whose ``drape`` parts run on their own).
 """
 
 from __future__ import annotations
@@ -20,11 +22,11 @@ from __future__ import annotations
 import sys
 import time
 
-from benchmarks import check_args, contact, report, scenes, shells, solvers
+from benchmarks import check_args, contact, report, scenes, shells, solvers, validation
 from fenics_garment._stack import MPI
 from fenics_garment.verification import shells as shell_cases
 
-SUITES = ("shells", "contact", "scenes", "solvers")
+SUITES = ("shells", "contact", "scenes", "solvers", "validation")
 DEFAULT_SUITES = ["shells", "contact"]
 
 
@@ -53,6 +55,8 @@ def main(argv: list[str] | None = None) -> int:
         scenes.main(parts + (["--quick"] if mode == "quick" else []))
     if "solvers" in suites and comm.rank == 0:  # its own mpiexec children, 1 and 2 ranks
         solvers.main(["--quick"] if mode == "quick" else [])
+    if "validation" in suites and comm.rank == 0:  # elastica, fabrics, curve tube (no drape)
+        validation.main([])
     if comm.rank == 0:
         report.write_report(say=say)
     say(f"benchmarks ({mode}: {', '.join(suites)}) done in {time.perf_counter() - t0:.0f} s")

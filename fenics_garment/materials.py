@@ -18,6 +18,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from fenics_garment import units
 
 SHEAR_CORRECTION = 5.0 / 6.0  # Reissner's transverse shear correction factor
@@ -190,6 +192,64 @@ class Fabric:
             thickness=h,
             mass_per_area=self.density * h,
         )
+
+
+@dataclass(frozen=True)
+class TensionStrainCurve:
+    """A measured uniaxial tension–strain curve: tension per unit *reference* width T [N/m]
+    against engineering strain e = λ − 1 (as KES-FB1 and strip tests report it), piecewise
+    linear between the samples, from (0, 0).
+
+    Beyond the samples the curve continues with its last slope; below zero strain with its first
+    (a fabric buckles in compression long before that stiffness matters; stated, replaceable).
+    The tension must not decrease (a convex strain energy: Newton's tangent stays positive).
+    Used by :func:`fenics_garment.shell.energy.tabulated_membrane`.
+    """
+
+    strain: tuple[float, ...]
+    tension: tuple[float, ...]
+    name: str = "curve"
+    source: str = field(default="", compare=False)
+
+    def __post_init__(self) -> None:
+        e = np.asarray(self.strain, dtype=float)
+        t = np.asarray(self.tension, dtype=float)
+        what = f"tension–strain curve {self.name!r}"
+        if e.ndim != 1 or e.shape != t.shape or len(e) < 2:
+            raise MaterialError(f"{what}: strain and tension need the same length ≥ 2")
+        if not (np.all(np.isfinite(e)) and np.all(np.isfinite(t))):
+            raise MaterialError(f"{what}: samples must be finite")
+        if e[0] != 0.0 or t[0] != 0.0:
+            raise MaterialError(f"{what}: must start at (0, 0), got ({e[0]}, {t[0]})")
+        if np.any(np.diff(e) <= 0):
+            raise MaterialError(f"{what}: strains must increase strictly")
+        if np.any(np.diff(t) < 0) or t[1] <= 0:
+            raise MaterialError(f"{what}: tension must not decrease and must rise at first")
+        object.__setattr__(self, "strain", tuple(float(x) for x in e))
+        object.__setattr__(self, "tension", tuple(float(x) for x in t))
+
+    @property
+    def slopes(self) -> np.ndarray:
+        """dT/de of each segment [N/m]."""
+        return np.diff(self.tension) / np.diff(self.strain)
+
+    def tension_at(self, e):
+        """T(e) [N/m], linear beyond the samples with the end slopes."""
+        e = np.asarray(e, dtype=float)
+        k = self.slopes
+        x = np.asarray(self.strain)
+        ramps = sum(dk * np.maximum(e - xi, 0.0) for dk, xi in zip(np.diff(k), x[1:-1],
+                                                                    strict=True))  # fmt: skip
+        return k[0] * e + ramps
+
+    def energy_at(self, e):
+        """W(e) = ∫₀ᵉ T de' [J/m²]: the strain energy per reference area of a uniaxial stretch."""
+        e = np.asarray(e, dtype=float)
+        k = self.slopes
+        x = np.asarray(self.strain)
+        ramps = sum(dk * np.maximum(e - xi, 0.0) ** 2 for dk, xi in zip(np.diff(k), x[1:-1],
+                                                                         strict=True))  # fmt: skip
+        return 0.5 * (k[0] * e**2 + ramps)
 
 
 _TABLE2 = (

@@ -30,6 +30,40 @@ def gf_per_cm_to_n_per_m(value: float) -> float:
     return value * GRAM_FORCE / CM
 
 
+def gf_cm_per_cm_to_nm_per_m(value: float) -> float:
+    """KES bending hysteresis 2HB (moment per unit width): gf·cm/cm → N·m/m (1 → 9.80665e-3)."""
+    return value * GRAM_FORCE * CM / CM
+
+
+def mg_per_cm2_to_kg_per_m2(value: float) -> float:
+    """Areal mass (KES W): mg/cm² → kg/m² (1 mg/cm² = 10 g/m² = 1e-2 kg/m²)."""
+    return value * 1e-6 / CM**2
+
+
+def g_per_m2_to_kg_per_m2(value: float) -> float:
+    """Areal mass (fabric 'weight'): g/m² → kg/m²."""
+    return value * 1e-3
+
+
+def mm_to_m(value: float) -> float:
+    """Length: mm → m."""
+    return value * MM
+
+
+def clo3d_stretch_to_n_per_m(value: float) -> float:
+    """CLO3D's stretch or shear input, labelled g/s², read literally as a force per unit width:
+    1 g/s² = 1e-3 kg/s² = 1e-3 N/m. (A reading of the unit label, not confirmed by CLO3D's
+    documentation of how it uses the number.)"""
+    return value * 1e-3
+
+
+def clo3d_bending_to_nm(value: float) -> float:
+    """CLO3D's bending input, labelled g·mm²/s², read literally as a moment per unit curvature
+    per unit width: 1 g·mm²/s² = 1e-3 kg × 1e-6 m²/s² = 1e-9 N·m. (A reading of the unit
+    label, as :func:`clo3d_stretch_to_n_per_m`.)"""
+    return value * 1e-3 * MM**2
+
+
 def g_per_cm3_to_kg_per_m3(value: float) -> float:
     """Density: g/cm³ → kg/m³."""
     return value * 1e3

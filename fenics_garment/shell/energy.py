@@ -25,7 +25,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from fenics_garment._stack import dolfinx, ufl
-from fenics_garment.materials import ShellStiffness
+from fenics_garment.materials import ShellStiffness, TensionStrainCurve
 from fenics_garment.shell.kinematics import ShellKinematics
 
 
@@ -86,6 +86,46 @@ def membrane_forces(
     law gives its own forces (``ShellModel.membrane_forces`` passes the law in use)."""
     eps = ufl.variable(kin.membrane)
     return ufl.diff(membrane(replace(kin, membrane=eps), C), eps)
+
+
+def tabulated_membrane(
+    warp: TensionStrainCurve, weft: TensionStrainCurve
+) -> Callable[[ShellKinematics, StiffnessConstants], ufl.core.expr.Expr]:
+    """A membrane law from measured tension–strain curves, warp and weft (replaces
+    :func:`membrane_energy`: ``ShellModel(..., membrane=tabulated_membrane(warp, weft))``).
+
+    ψ_m = W₁(e₁) + W₂(e₂) + 2 A66 ε₁₂², with e_α = √(1 + 2ε_αα) − 1 the engineering strain of
+    the warp and weft threads (ε the Green–Lagrange strain in the warp/weft frame) and
+    W(e) = ∫₀ᵉ T de the curve's energy. A piecewise-linear T(e) = k₀ e + Σᵢ Δkᵢ ⟨e − eᵢ⟩ (slope
+    jumps Δkᵢ at the interior samples eᵢ) gives W(e) = ½k₀e² + ½Σᵢ Δkᵢ⟨e − eᵢ⟩²: C¹, convex
+    for a non-decreasing curve. Uniaxially along a thread, S = dW/dε = T(e)/λ, so the nominal
+    tension per reference width λS is the curve's T(e) exactly.
+
+    No Poisson coupling between warp and weft (the curves are uniaxial; a woven fabric's
+    in-plane Poisson effect is small at the strains of wear) and the in-plane shear keeps the
+    material's A66. The samples are ``fem.Constant`` s, so curves with the same number of samples
+    share one compiled form.
+    """
+
+    def law(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+        domain = ufl.domain.extract_unique_domain(C.A66)
+        eps = kin.membrane
+        psi = 2 * C.A66 * eps[0, 1] ** 2
+        for a, curve in enumerate((warp, weft)):
+            k = curve.slopes
+            e = ufl.sqrt(1 + 2 * eps[a, a]) - 1
+            k0 = dolfinx.fem.Constant(domain, dolfinx.default_scalar_type(k[0]))
+            psi += 0.5 * k0 * e**2
+            if len(k) > 1:
+                knots = dolfinx.fem.Constant(domain, np.asarray(curve.strain[1:-1]))
+                jumps = dolfinx.fem.Constant(domain, np.diff(k))
+                for i in range(len(k) - 1):
+                    psi += 0.5 * jumps[i] * ufl.max_value(e - knots[i], 0.0) ** 2
+        return psi
+
+    # named by its curves in the records of the terms in use (summary.json)
+    law.__qualname__ = law.__name__ = f"tabulated_membrane[{warp.name} / {weft.name}]"
+    return law
 
 
 def bending_energy(kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:

@@ -36,7 +36,9 @@ from fenics_garment.contact import pressure
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.primitives import cylinder, sphere_patch
 from fenics_garment.contact.search import SearchSurface
+from fenics_garment.materials import Fabric, TensionStrainCurve
 from fenics_garment.shell import bcs as shell_bcs
+from fenics_garment.shell.energy import tabulated_membrane
 from fenics_garment.shell.geometry import parametric_surface_mesh
 from fenics_garment.shell.kinematics import ShellGeometry
 from fenics_garment.shell.model import ShellModel
@@ -190,8 +192,13 @@ def tight_tube(
     options: dict | None = None,
     surface: type[SearchSurface] = SearchSurface,
     rest: str = "mesh",
+    membrane=None,
 ) -> ContactCase:
     """One eighth of a tight tube (rest radius r0, length L) on a rigid cylinder of radius R.
+
+    ``membrane``: a membrane law replacing the quadratic one (e.g.
+    :func:`~fenics_garment.shell.energy.tabulated_membrane`); the reference stays that of the
+    quadratic law (see :func:`curve_tube` for the tabulated one).
 
     ``rest="flat"``: the tube's stress-free state is the flat rectangle (2πr0 × L, warp along
     the axis or around it as ``warp`` says) rather than the cylinder it is placed on
@@ -226,6 +233,8 @@ def tight_tube(
         rest=Y,
     )  # fmt: skip
     model = ShellModel(geo, material, element=element)
+    if membrane is not None:
+        model.membrane = membrane
     body = surface(*cylinder(R, -L, L, n_body, n_body_z))
     contact = shell_contact.attach(model, body, kappa=kappa, kappa_hat=kappa_hat, rule=rule)
     bcs = (
@@ -240,6 +249,65 @@ def tight_tube(
     return ContactCase(model, contact, solver, bcs, ref, R, r0,
                  {"L": L, "warp": warp, "membrane_only": tube_pressure(R_c, r0, s, warp=warp,
                                                                        bending=False)})  # fmt: skip
+
+
+#: A knit-like J-shaped tension–strain pair (synthetic, for verification: not a measurement):
+#: soft at first (yarns straighten, loops deform), stiffening as the yarns themselves stretch.
+#: Tension per unit reference width [N/m] at engineering strain 0 … 40 %; the weft curve is
+#: half the warp's.
+KNIT_LIKE_WARP = TensionStrainCurve(
+    strain=(0.0, 0.02, 0.05, 0.10, 0.20, 0.40), tension=(0.0, 2.0, 6.0, 16.0, 60.0, 250.0),
+    name="knit-like warp (synthetic)",
+)  # fmt: skip
+KNIT_LIKE_WEFT = TensionStrainCurve(
+    strain=KNIT_LIKE_WARP.strain, tension=tuple(0.5 * t for t in KNIT_LIKE_WARP.tension),
+    name="knit-like weft (synthetic)",
+)  # fmt: skip
+
+
+def curve_tube_pressure(R_c: float, r0: float, hoop: TensionStrainCurve, d_tt: float) -> float:
+    """Exact free-end pressure of a tight tube of a :func:`tabulated_membrane` fabric [Pa].
+
+    Without warp/weft coupling the free ends leave the axial strain 0 (S_zz = T_z(e_z)/λ_z = 0),
+    so the hoop force per deformed axial length is the curve's tension at the wrapped strain
+    e = R_c/r0 − 1 and p = T(e)/R_c, plus the bending part D_θθ(λ − 1)/(r0² R_c) of
+    :func:`tube_pressure`."""
+    lam = R_c / r0
+    return float(hoop.tension_at(lam - 1) / R_c + d_tt * (lam - 1) / (r0**2 * R_c))
+
+
+def curve_tube(
+    comm: MPI.Comm,
+    warp_curve: TensionStrainCurve = KNIT_LIKE_WARP,
+    weft_curve: TensionStrainCurve = KNIT_LIKE_WEFT,
+    *,
+    warp: str = "axial",
+    B: tuple[float, float] = (1.0e-4, 2.5e-5),
+    shear: float = 20.0,
+    thickness: float = 1.0e-3,
+    **kwargs,
+) -> ContactCase:
+    """:func:`tight_tube` of a fabric whose membrane law is the tension–strain curves
+    (:func:`~fenics_garment.shell.energy.tabulated_membrane`), bending ``B`` (warp, weft) [N·m]
+    and in-plane shear stiffness ``shear`` [N/m]; reference :func:`curve_tube_pressure`.
+
+    The fabric's linear moduli (used for the penalty scale and the PSRI weight only) are the
+    curves' initial slopes over the thickness."""
+    k_warp, k_weft = warp_curve.slopes[0], weft_curve.slopes[0]
+    material = Fabric(E_warp=k_warp / thickness, E_weft=k_weft / thickness,
+                      G12=shear / thickness, B_warp=B[0], B_weft=B[1], thickness=thickness,
+                      density=0.0, nu12=0.0, name="curve-fabric")  # fmt: skip
+    law = tabulated_membrane(warp_curve, weft_curve)
+    case = tight_tube(comm, material, warp=warp, membrane=law, **kwargs)
+    R_c = case.R + thickness / 2
+    hoop, d_tt = (weft_curve, B[1]) if warp == "axial" else (warp_curve, B[0])
+    case.reference = curve_tube_pressure(R_c, case.r0, hoop, d_tt)
+    case.extra["membrane_only"] = curve_tube_pressure(R_c, case.r0, hoop, 0.0)
+    case.extra["strain"] = R_c / case.r0 - 1
+    case.extra["hoop_curve"] = hoop.name
+    # the quadratic law with the curve's initial slope: how far the curve is from linear here
+    case.extra["linear_law"] = tube_pressure(R_c, case.r0, material.stiffness(), warp=warp)
+    return case
 
 
 def tight_cap(
