@@ -34,6 +34,8 @@ def read_polygons(path: str | Path) -> tuple[Array, IArray]:
             if b"end_header" not in f.read(1 << 16):
                 raise ScanError(f"{p}: PLY header without end_header", "is the file truncated?")
     suffix = _format_suffix(p)
+    if p.suffix.lower() == ".stl":
+        _check_binary_stl_size(p)
     v, t = _read_trimesh(p, suffix) if suffix in TRIMESH_SUFFIXES else _read_meshio(p)
     if len(t) == 0 or len(v) == 0:
         raise ScanError(f"{p}: no surface faces", "expected triangles, quads or polygons")
@@ -42,6 +44,24 @@ def read_polygons(path: str | Path) -> tuple[Array, IArray]:
     if t.min() < 0 or t.max() >= len(v):
         raise ScanError(f"{p}: faces refer to vertices that do not exist (file corrupted?)")
     return v, t
+
+
+def _check_binary_stl_size(p: Path) -> None:
+    """A binary STL is an 80-byte header, the triangle count n and 50 bytes per triangle: a file
+    of another size that is not ASCII STL is cut short or not STL (trimesh 5.2 reads some such
+    files as an empty mesh instead of failing)."""
+    size = p.stat().st_size
+    with p.open("rb") as f:
+        start = f.read(4096)
+    if start.lstrip()[:5].lower() == b"solid" and b"facet" in start:
+        return  # ASCII STL
+    n = int.from_bytes(start[80:84], "little") if len(start) >= 84 else -1
+    if n < 0 or size != 84 + 50 * n:
+        what = "shorter than its header" if size < 84 else f"{size} bytes, not 84 + 50 × {n}"
+        raise ScanError(
+            f"{p}: not a readable mesh (a binary STL {what})",
+            "the file may be truncated or not an STL file",
+        )
 
 
 def _unreadable(p: Path, e: BaseException) -> ScanError:
