@@ -525,7 +525,8 @@ def write_demo_pages(app) -> None:
     for name, toml in _scene_demo_files().items():
         pages[f"{toml[:-5]}.md"] = scene_demo_page(name, toml, demos.REGISTRY[name].summary)
     for py in sorted((ROOT / "demos").glob("*.py")):
-        pages[f"{py.stem}.md"] = literate_page(py)
+        if py.read_text().startswith("# # "):  # a literate demo (not a hook file such as
+            pages[f"{py.stem}.md"] = literate_page(py)  # knit_curve.py: theory/variants.md)
     for old in GENERATED.glob("*.md"):
         if old.name not in pages:
             old.unlink()
