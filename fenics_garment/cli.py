@@ -77,7 +77,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return demos.REGISTRY[name].run(Path(args.output), quiet=args.quiet)
 
 
-#: Exit codes (documented in ``run --help`` and the README).
+#: Exit codes (documented in ``run --help`` and the README); a signal s: 128 + s.
 EXIT_INTERNAL, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERRUPTED = 1, 2, 5, 130
 
 
@@ -94,19 +94,61 @@ def _input_errors() -> tuple[type[Exception], ...]:
             PetscOptionError)  # fmt: skip
 
 
+#: Characters of an error line (an echoed value is cut well before; this is the last guard).
+LINE = 1000
+
+
 def _one_line(err: BaseException) -> str:
-    return " ".join(str(err).split()) or type(err).__name__
+    from fenics_garment.bounded import cut
+
+    return cut(" ".join(str(err).split()), LINE) or type(err).__name__
 
 
-def _run_guarded(args: argparse.Namespace) -> int:
+def _continue_command(err, args: argparse.Namespace) -> str:
+    """The command that continues an interrupted run (or starts it again: no checkpoint)."""
+    import shlex
+
+    from fenics_garment._stack import MPI
+
+    n = MPI.COMM_WORLD.size
+    launch = f"mpiexec -n {n} " if n > 1 else ""
+    if err.folder is not None and err.checkpoint:
+        return f"continue with `{launch}fenics-garment run --resume {shlex.quote(str(err.folder))}`"
+    if err.folder is not None and args.resume is not None:
+        return f"no checkpoint yet: `{launch}fenics-garment run --resume " \
+               f"{shlex.quote(str(args.resume))}` starts it again"  # fmt: skip
+    scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
+    return f"no checkpoint yet: start it again with `{launch}fenics-garment run {scene}`"
+
+
+def _interrupted(err, args: argparse.Namespace) -> str:
+    from fenics_garment.interrupt import signal_name
+
+    if getattr(args, "func", None) is not _cmd_run:
+        return f"interrupted by {signal_name(err.signum)} {err.stage}"
+    return f"interrupted by {signal_name(err.signum)} {err.stage}; " + _continue_command(err, args)
+
+
+def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
     """``args.func(args)`` with every error turned into one line and an exit code; an error on
     one MPI rank ends every rank (:mod:`fenics_garment.mpi_guard`)."""
-    from fenics_garment import mpi_guard
+    from fenics_garment import interrupt, mpi_guard
+    from fenics_garment._stack import MPI
     from fenics_garment.output import OutputError
 
     mpi_guard.setup()
+    interrupt.install()  # after the stack: PETSc's own handlers abort with code 59
+    if MPI.COMM_WORLD.rank == 0:
+        for warning in warnings:
+            print(f"warning: {warning}", file=sys.stderr, flush=True)
     try:
-        return int(args.func(args))
+        interrupt.set_stage("before the run started")
+        code = int(args.func(args))
+        interrupt.set_stage("after the command had finished (its outputs are complete)")
+        interrupt.poll(MPI.COMM_WORLD)
+        return code
+    except interrupt.Interrupted as err:
+        return mpi_guard.end_together(err.code, _interrupted(err, args))
     except _input_errors() as err:
         return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
     except OutputError as err:
@@ -233,7 +275,9 @@ def build_parser() -> argparse.ArgumentParser:
         "outputs of the last converged state are written); 4 done, but a result check "
         "(penetration, spring, force balance, contact area) failed: a WARNING each, see "
         "'checks' in summary.json; 5 a file could not be written (disk full, read-only "
-        "folder): free space and --resume; 130 interrupted.",
+        "folder; the line says what failed, run.json too): free space and --resume; 129, "
+        "130, 143 stopped by SIGHUP, SIGINT (Ctrl-C), SIGTERM: the line names the stage "
+        'reached and the command that continues the run; run.json says "interrupted".',
     )
     p_run.add_argument("scene", nargs="?",
                        help="scene file, e.g. demos/cotton_gilet.toml (optional with --resume: "
@@ -269,13 +313,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _release_objects() -> None:
+    """Free a stopped run's objects (reference cycles) while their libraries are loaded: at
+    interpreter exit nanobind reports those it finds as leaks, many lines on stderr."""
+    import gc
+
+    gc.collect()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 0
-    return _run_guarded(args)
+    from fenics_garment import environment, interrupt
+
+    warnings = environment.prepare()  # before the stack is loaded (HOME, JIT cache, backend)
+    interrupt.tolerate_closed_output()
+    code = _run_guarded(args, warnings)
+    _release_objects()
+    return code
 
 
 if __name__ == "__main__":

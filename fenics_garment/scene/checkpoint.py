@@ -66,6 +66,11 @@ def _arrays(built) -> dict[str, np.ndarray]:
     return arrays | st.search_memory()
 
 
+def exists(run_folder: Path) -> bool:
+    """Whether ``run_folder`` has a checkpoint to resume from (its ``progress.json``)."""
+    return (Path(run_folder) / FOLDER / "progress.json").is_file()
+
+
 def _rank_file(folder: Path, k: int, rank: int) -> Path:
     return folder / f"state-{k}.r{rank}.npz"
 

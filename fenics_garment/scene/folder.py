@@ -148,12 +148,14 @@ class RunFolder:
 
         self._collective(work)
 
-    def finish(self, status: str, *, collective: bool = True) -> None:
-        """Write the final ``status``. ``collective=False`` (on an error path, where the other
-        ranks may be anywhere): rank 0 only, best effort, never raises."""
+    def finish(self, status: str, *, collective: bool = True, **detail: str) -> None:
+        """Write the final ``status`` (and ``detail``: what failed, the signal and stage of an
+        interruption). ``collective=False`` (on an error path, where the other ranks may be
+        anywhere): rank 0 only, best effort, never raises."""
 
         def work() -> None:
-            self.state.update(status=status, finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
+            self.state.update(status=status, finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                              **detail)  # fmt: skip
             self._write()
 
         if collective:

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fenics_garment import output
+from fenics_garment import interrupt, output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
@@ -361,8 +361,14 @@ def run(
         result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
                          checkpoints=checkpoints, terms=terms)  # fmt: skip
     except output.OutputError as err:
-        state.finish("failed", collective=False)
+        state.finish("failed", collective=False, error=str(err), stage=interrupt.stage())
         err.folder = err.folder or folder
+        raise
+    except interrupt.Interrupted as err:
+        err.folder = err.folder or folder
+        err.checkpoint = checkpoint.exists(folder)
+        state.finish("interrupted", collective=False, signal=interrupt.signal_name(err.signum),
+                     stage=err.stage)  # fmt: skip
         raise
     except BaseException:
         state.finish("failed", collective=False)
@@ -407,7 +413,9 @@ def _run_in(
     text = config.dumps(recorded)
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
+    interrupt.set_stage("while building the scene")
     built = build_stage(scene, comm, say, times, check=meta is None)
+    interrupt.poll(comm)
     hooks = [h for h in (config.load_terms(scene.physics.terms, scene.source), terms) if h]
 
     def edit(b: scene_build.Built) -> None:
@@ -425,6 +433,8 @@ def _run_in(
     if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
         solved.report.levels = levels
         solved.report.sequence_failed = levels[-1]["message"]
+    interrupt.set_stage("while writing the outputs (the dressing is complete)")
+    interrupt.poll(comm)
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
@@ -496,12 +506,14 @@ def solve_stage(
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
+    interrupt.set_stage("while compiling the forms")
     solver = scene_solver(built)
     solver.progress = _slow_iterations(say)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
     if times["jit"] >= SLOW_ITERATION_S:  # the JIT, or the Jacobian's sparsity of a large mesh
         say(f"  forms compiled and the Jacobian allocated ({times['jit']:.0f} s)")
+    interrupt.poll(comm)
     t0 = time.perf_counter()
     progress = start
     if meta is not None:
@@ -529,6 +541,10 @@ def solve_stage(
             report.levels, report.sequence_failed = levels, why
     except output.OutputError:
         frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
+        raise
+    except interrupt.Interrupted as err:
+        if err.collective:  # every rank is here (a second signal stops one rank at once)
+            frames.discard(comm)
         raise
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
@@ -675,7 +691,12 @@ def _dress(
     h = built.model.stiffness.thickness  # the tolerance is a fraction of it
     al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
 
+    comm = built.model.geometry.mesh.comm
+    solves = 0
+
     def on_step(rec: DressStep) -> None:
+        nonlocal solves
+        solves += 1
         if frames is not None:  # (None: a coarser level of a mesh sequence)
             frames.write()
         cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
@@ -683,17 +704,25 @@ def _dress(
                 else f"sewn {rec.shrink:10.3f}   " if rec.stage == "sew"
                 else f"spring c {rec.regularisation:8.2g} Pa/m")  # fmt: skip
         say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
+        level = "" if frames is not None else " of a coarser mesh level"
+        interrupt.set_stage(f"while dressing{level} (after solve {solves}: "
+                            f"{' '.join(what.split())})")  # fmt: skip
 
     def on_failure(target: float, its: int, reason: int, what: str = "shrink") -> None:
         to = f"{target * 1e3:6.2f} mm" if what == "shrink" else f"{target:.3f}"
         say(f"  {what} → {to} failed (SNES reason {reason}, {its} its): halving the step")
+        interrupt.poll(comm)
 
-    write_ckpt = (lambda pr: ckpt.write(built, pr)) if ckpt is not None else None
+    def on_checkpoint(pr: Progress) -> None:
+        if ckpt is not None:
+            ckpt.write(built, pr)
+        interrupt.poll(comm)  # after the checkpoint: a resume loses no solve
+
     try:
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
                        on_failure=on_failure, augmented_lagrangian=al,
-                       on_checkpoint=write_ckpt, resume=progress, schedule=d.schedule,
+                       on_checkpoint=on_checkpoint, resume=progress, schedule=d.schedule,
                        friction_while_growing=d.friction_while_growing,
                        release_ratio=d.release_ratio, predictor=d.predictor,
                        path_tolerance=d.path_tolerance,
