@@ -25,6 +25,8 @@ MAX_PROGRESS_BYTES = 64 << 20
 MAX_DEPTH = 32
 #: Characters of a value echoed in an error message.
 ECHO = 80
+#: Characters of a path echoed in an error message.
+PATH_ECHO = 400
 
 
 class BoundError(ValueError):
@@ -32,10 +34,17 @@ class BoundError(ValueError):
 
 
 def cut(text: str, limit: int = ECHO) -> str:
-    """``text`` cut to ``limit`` characters, saying how long it was."""
+    """``text`` cut to about ``limit`` characters (its start and its end), saying how long it
+    was."""
     if len(text) <= limit:
         return text
-    return f"{text[: limit - 1]}… ({len(text)} characters)"
+    half = max(limit // 2 - 1, 1)
+    return f"{text[:half]}…{text[-half:]} ({len(text)} characters)"
+
+
+def cut_path(path: object) -> str:
+    """A path for an error message, cut to :data:`PATH_ECHO` characters."""
+    return cut(str(path), PATH_ECHO)
 
 
 def shown(value: Any, limit: int = ECHO) -> str:
@@ -62,13 +71,13 @@ def check_regular(path: Path, limit: int, what: str) -> None:
     file system raises it); the file is not opened, so a FIFO never blocks."""
     st = os.stat(path)
     if not stat.S_ISREG(st.st_mode):
-        raise BoundError(f"{cut(str(path))}: {_kind(st.st_mode)}, not a {what} file")
+        raise BoundError(f"{cut_path(path)}: {_kind(st.st_mode)}, not a {what} file")
     if st.st_size > limit:
         raise BoundError(_too_large(path, limit, what))
 
 
 def _too_large(path: Path, limit: int, what: str) -> str:
-    return f"{cut(str(path))}: larger than {limit // 1024} kB, the limit of a {what} file"
+    return f"{cut_path(path)}: larger than {limit // 1024} kB, the limit of a {what} file"
 
 
 def read_bytes(path: Path, limit: int, what: str) -> bytes:
@@ -99,4 +108,4 @@ def depth(data: Any) -> int:
 def check_depth(data: Any, where: str) -> None:
     """BoundError when ``data`` is nested deeper than :data:`MAX_DEPTH`."""
     if depth(data) > MAX_DEPTH:
-        raise BoundError(f"{cut(where)}: nested deeper than {MAX_DEPTH} levels")
+        raise BoundError(f"{cut_path(where)}: nested deeper than {MAX_DEPTH} levels")

@@ -155,7 +155,7 @@ def _check_file(path: Path) -> None:
     except bounded.BoundError as e:
         raise PatternError(str(e)) from None
     except OSError as e:
-        raise PatternError(f"{bounded.cut(str(path))}: cannot read: {_one_line(e)}") from None
+        raise PatternError(f"{bounded.cut_path(path)}: cannot read: {_one_line(e)}") from None
 
 
 def load_data(path: Path) -> Any:

@@ -49,9 +49,9 @@ class SceneError(ValueError):
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key = source, key
-        source, key = bounded.cut(source), bounded.cut(key)
+        source, key = bounded.cut_path(source), bounded.cut(key)
         where = f"{source}: " if source else ""
-        message = bounded.cut(message, 600)
+        message = bounded.cut(message, 1000)
         super().__init__(f"{where}[{key}] {message}" if key else f"{where}{message}")
 
 
@@ -703,10 +703,10 @@ def load(path: str | Path) -> Scene:
     its tables nested at most :data:`~fenics_garment.bounded.MAX_DEPTH` deep, and it must set
     something (an empty file is refused: it would dress the default scene without a word)."""
     path = Path(path)
-    where = bounded.cut(str(path))
+    where = bounded.cut_path(path)
     if bounded.has_control(str(path)):
-        raise SceneError(shown(str(path)), "", "the scene file's path has a control "
-                         "character (a newline, a tab, …): rename it")  # fmt: skip
+        raise SceneError(bounded.cut_path(repr(str(path))), "", "the scene file's path has a "
+                         "control character (a newline, a tab, …): rename it")  # fmt: skip
     data = _parse(path, where)
     if not data:
         raise SceneError(where, "", "empty scene file: nothing to dress (give at least its "

@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fenics_garment import interrupt, output
+from fenics_garment import interrupt, mpi_guard, output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
@@ -129,9 +129,9 @@ class _Frames:
             self.packed = dolfinx.fem.Function(V4)
             self.expr = dolfinx.fem.Expression(_membrane_fields(model),
                                                V4.element.interpolation_points)  # fmt: skip
-            self.writer = dolfinx.io.VTXWriter(
-                mesh.comm, self.tmp, [self.disp, self.rot, self.p, *self.scalars], engine="BP4"
-            )
+            fields = [self.disp, self.rot, self.p, *self.scalars]
+            self._guarded(lambda: setattr(self, "writer", dolfinx.io.VTXWriter(
+                mesh.comm, self.tmp, fields, engine="BP4")))  # fmt: skip
         self.k = 0
 
     def write(self) -> None:
@@ -148,42 +148,32 @@ class _Frames:
         self._guarded(lambda: self.writer.write(float(self.k)))
         self.k += 1
 
-    def _guarded(self, work) -> None:
+    def _guarded(self, work: Callable[[], object]) -> None:
         """``work()`` on the ADIOS2 writer; a failure on any rank (a full disk: ADIOS2 raises a
-        RuntimeError) is an OutputError on every rank, with the partial series removed."""
+        C++ exception, a RuntimeError here) is an OutputError on every rank, decided together
+        (``output.agree``), with the partial series removed."""
         comm = self.built.model.geometry.mesh.comm
         message = None
         try:
             work()
-        except RuntimeError as err:
+        except Exception as err:  # whatever the C++ writer threw
             message = _adios_reason(str(err), self.tmp)
-        message = next((m for m in comm.allgather(message) if m), None)
+        message = output.agree(comm, message)
         if message is None:
             return
-        # The writer's destructor flushes again; on a disk still full it would fail again and
-        # abort the process. So its files are emptied (which frees their space although
-        # ADIOS2 keeps them open), it is closed, and the partial series removed; a writer that
-        # cannot even close then is kept alive (with its emptied folder) until the process ends.
         self.discard(comm)
         raise output.OutputError(message)
 
     def discard(self, comm: MPI.Comm) -> None:
-        """Remove the partial series after another file failed (collective): its files are
-        emptied first (the disk may be full), the writer closed, the folder removed; a writer
-        that cannot close is kept alive with its folder, as in :meth:`_guarded`."""
+        """Remove the partial series (after a failure of this or another file, or an
+        interruption). The writer is not closed: on a full disk its close, and then its
+        destructor, would write again, and a C++ exception in a destructor aborts the process
+        (and a collective close can leave one rank waiting for another that gave up). It is
+        left alive until the process ends (:func:`_abandon`); its files are removed."""
         writer, self.writer = self.writer, None
-        if writer is None:
-            return
+        if writer is not None:
+            _abandon(writer)
         if comm.rank == 0:
-            _empty(self.tmp)
-        comm.Barrier()
-        try:
-            writer.close()
-            closed = True
-        except RuntimeError:
-            _ABANDONED.append(writer)
-            closed = False
-        if comm.allreduce(closed, op=MPI.LAND) and comm.rank == 0:
             shutil.rmtree(self.tmp, ignore_errors=True)
 
     def close(self, comm: MPI.Comm) -> None:
@@ -191,21 +181,21 @@ class _Frames:
             return
         self._guarded(self.writer.close)
         comm.Barrier()
-        if comm.rank == 0:
-            output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp))
+        output.guarded(comm, lambda: output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp)))
         comm.Barrier()
 
 
-#: VTX writers that failed (kept alive: see ``_Frames._guarded``).
+#: VTX writers that failed (kept alive: see ``_Frames.discard``).
 _ABANDONED: list = []
 
 
-def _empty(folder: Path) -> None:
-    for f in folder.glob("*"):
-        try:
-            os.truncate(f, 0)
-        except OSError:
-            pass
+def _abandon(writer: object) -> None:
+    """Keep ``writer`` alive until the process ends, its destructor never run: one more
+    reference than any owner will release (the list alone is emptied at interpreter exit)."""
+    import ctypes
+
+    _ABANDONED.append(writer)
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(writer))
 
 
 def _adios_reason(text: str, path: Path) -> str:
@@ -356,6 +346,7 @@ def run(
     preflight.output_folder(folder, comm)
     state = run_folder.RunFolder(folder, comm)
     state.acquire()
+    mpi_guard.ON_ABORT.append(state.mark_failed)
     try:
         state.start(fresh=meta is None, clear=clear)
         result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
@@ -374,6 +365,7 @@ def run(
         state.finish("failed", collective=False)
         raise
     finally:
+        mpi_guard.ON_ABORT.remove(state.mark_failed)
         state.release()
     return result
 
@@ -413,10 +405,16 @@ def _run_in(
     text = config.dumps(recorded)
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
+    hooks = [h for h in (config.load_terms(scene.physics.terms, scene.source), terms) if h]
+    depends = checkpoint.depends(scene, hooks)
+    if meta is not None:
+        checkpoint.check_depends(meta, depends, folder, later=("meshes",))
     interrupt.set_stage("while building the scene")
     built = build_stage(scene, comm, say, times, check=meta is None)
+    depends["meshes"] = checkpoint.mesh_digest(built)
+    if meta is not None:
+        checkpoint.check_depends(meta, depends, folder)
     interrupt.poll(comm)
-    hooks = [h for h in (config.load_terms(scene.physics.terms, scene.source), terms) if h]
 
     def edit(b: scene_build.Built) -> None:
         for hook in hooks:
@@ -429,7 +427,7 @@ def _run_in(
         start, levels = sequence_stage(built, say, times, edit, first_step=first_step)
         first_step = None if start is not None else first_step
     solved = solve_stage(built, folder, recorded, meta, say, times, first_step=first_step,
-                         checkpoints=checkpoints, start=start)  # fmt: skip
+                         checkpoints=checkpoints, start=start, depends=depends)  # fmt: skip
     if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
         solved.report.levels = levels
         solved.report.sequence_failed = levels[-1]["message"]
@@ -499,10 +497,12 @@ def solve_stage(
     first_step: float | None = None,
     checkpoints: bool = True,
     start: Progress | None = None,
+    depends: dict[str, str] | None = None,
 ) -> Solved:
     """Stage 2: compile the residual of the problem as it is now and dress (VTX frames and
     checkpoints on the way; ``meta``: the checkpoint to resume from; ``start``: where a fresh
-    dressing starts, the state already in the model: :func:`sequence_stage`)."""
+    dressing starts, the state already in the model: :func:`sequence_stage`; ``depends``: what
+    the checkpoints record besides the scene, :func:`.checkpoint.depends`)."""
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
@@ -521,7 +521,8 @@ def solve_stage(
         frames.k = len(progress.report.steps)
         say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
             f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
-    ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0)
+    ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0,
+                             depends)  # fmt: skip
     kappa0 = float(built.contact.kappa.value)
     try:
         report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
