@@ -169,11 +169,13 @@ class _Frames:
         interruption). The writer is not closed: on a full disk its close, and then its
         destructor, would write again, and a C++ exception in a destructor aborts the process
         (and a collective close can leave one rank waiting for another that gave up). It is
-        left alive until the process ends (:func:`_abandon`); its files are removed."""
+        left alive until the process ends (:func:`_abandon`); its files are emptied and
+        removed."""
         writer, self.writer = self.writer, None
         if writer is not None:
             _abandon(writer)
         if comm.rank == 0:
+            _empty(self.tmp)  # frees the space at once: the writer keeps its files open
             shutil.rmtree(self.tmp, ignore_errors=True)
 
     def close(self, comm: MPI.Comm) -> None:
@@ -187,6 +189,14 @@ class _Frames:
 
 #: VTX writers that failed (kept alive: see ``_Frames.discard``).
 _ABANDONED: list = []
+
+
+def _empty(folder: Path) -> None:
+    for f in folder.glob("*"):
+        try:
+            os.truncate(f, 0)
+        except OSError:
+            pass
 
 
 def _abandon(writer: object) -> None:
