@@ -255,22 +255,41 @@ def _interrupt(b: Bench, out: Path, sig: int, *, ranks: int = 1, when: str = "ch
     return finish(p, t0)
 
 
+def _descendants(pid: int) -> list[int]:
+    """Every process started, directly or not, by ``pid``."""
+    children: dict[int, list[int]] = {}
+    for d in Path("/proc").iterdir():
+        try:
+            ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
+        except (OSError, ValueError, IndexError):
+            continue
+        children.setdefault(ppid, []).append(int(d.name))
+    found, todo = [], [pid]
+    while todo:
+        kids = children.get(todo.pop(), [])
+        found += kids
+        todo += kids
+    return found
+
+
 def rank_pids(p: subprocess.Popen, ranks: tuple[int, ...] = (1,)) -> list[int]:
     """The pids of the given MPI ranks started by launcher ``p`` (from their PMI_RANK)."""
     found = []
-    for d in Path("/proc").iterdir():
-        if not d.name.isdigit():
-            continue
+    for pid in _descendants(p.pid):
         try:
-            env = (d / "environ").read_bytes().split(b"\0")
-            cmd = (d / "cmdline").read_bytes()
+            env = Path(f"/proc/{pid}/environ").read_bytes().split(b"\0")
+            cmd = Path(f"/proc/{pid}/cmdline").read_bytes()
         except OSError:
             continue
-        if b"fenics_garment.cli" in cmd and os.getpgid(int(d.name)) == p.pid:
-            rank = next((int(e[9:]) for e in env if e.startswith(b"PMI_RANK=")), -1)
-            if rank in ranks:
-                found.append(int(d.name))
+        rank = next((int(e[9:]) for e in env if e.startswith(b"PMI_RANK=")), -1)
+        if b"fenics_garment.cli" in cmd and rank in ranks:
+            found.append(pid)
     return found
+
+
+def job_pids(p: subprocess.Popen) -> list[int]:
+    """The launcher and every process of its job (a closed terminal signals them all)."""
+    return [p.pid, *_descendants(p.pid)]
 
 
 def _signal_problems(p: Proc, folder: Path, checkpoint: bool) -> list[str]:
@@ -296,9 +315,15 @@ def try_signals(b: Bench) -> None:
                 problems = resume_check(b, out / FOLDER, ranks)
             record(b, k, f"{sig.name} after a checkpoint, {ranks} rank(s), resume", p, 128 + sig,
                    problems)  # fmt: skip
-    out = b.work / "sig-one-rank"
-    p = _interrupt(b, out, signal.SIGTERM, ranks=2, target=rank_pids)
-    record(b, k, "SIGTERM to rank 1 of 2 only", p, 143, _signal_problems(p, out / FOLDER, True))
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        out = b.work / f"sig-one-rank-{sig.name}"
+        p = _interrupt(b, out, sig, ranks=2, target=rank_pids)
+        record(b, k, f"{sig.name} to rank 1 of 2 only", p, 128 + sig,
+               _signal_problems(p, out / FOLDER, True))  # fmt: skip
+    out = b.work / "sig-hup-job"
+    p = _interrupt(b, out, signal.SIGHUP, ranks=2, target=job_pids)
+    record(b, k, "SIGHUP to the whole job (terminal closed), 2 ranks", p, 129,
+           _signal_problems(p, out / FOLDER, True))  # fmt: skip
     for when in ("2.5", "5"):
         out = b.work / f"sig-early-{when}"
         p = _interrupt(b, out, signal.SIGINT, when=when)
@@ -412,8 +437,12 @@ LIES: list[tuple[str, Callable[[Path], None]]] = [
 
 
 def try_checkpoint(b: Bench) -> None:
+    """The lies are told of a checkpoint written while the body grows (6 grow steps: the
+    signal lands a step or two after the first checkpoint, the body still shrunk)."""
     k = "checkpoint"
-    base = _interrupted_folder(b, "lies-base")
+    six = b.work / "tube6.toml"
+    six.write_text(_scene_text(b).replace("steps = 2\n", "steps = 6\n"))
+    base = _interrupted_folder(b, "lies-base", six)
     for name, lie in LIES:
         folder = b.work / "lies" / name.replace(" ", "_").replace("'", "")
         shutil.copytree(base, folder)
