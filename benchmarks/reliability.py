@@ -550,11 +550,9 @@ def _umount(where: Path) -> None:
     subprocess.run(["umount", "-l", str(where)], capture_output=True)
 
 
-def _full_run_problems(b: Bench, folder: Path, p: Proc) -> list[str]:
+def _full_run_problems(b: Bench, folder: Path, p: Proc, ascii: bool = False) -> list[str]:
     problems = same_answer(b, folder, 1) if p.code == 0 else []
-    try:
-        p.out.encode("ascii")
-    except UnicodeEncodeError:
+    if ascii and not p.out.isascii():
         problems.append("non-ASCII stdout")
     return problems
 
@@ -579,7 +577,11 @@ def try_environment(b: Bench) -> None:
         out = w / name.replace(" ", "_").replace("=", "-")
         scene = pictures if check == "pictures" else b.scene
         p = run(["run", str(scene), "-o", str(out)], env=env)
-        problems = _full_run_problems(b, out / FOLDER, p) if check != "pictures" else []
+        problems = (
+            []
+            if check == "pictures"
+            else _full_run_problems(b, out / FOLDER, p, ascii=check == "ascii")
+        )
         if check == "ascii" and p.code == 0 and p.out.count("\n") < 5:
             problems.append("progress lines missing")
         if check == "pictures" and not (out / FOLDER / "pressure_garment.png").exists():

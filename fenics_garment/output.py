@@ -62,7 +62,7 @@ def describe_os_error(err: OSError) -> str:
 #: Seconds a rank with an output error waits for every other rank to reach the decision
 #: (:func:`agree`) before it stops the job: another rank may be stuck in a collective call of a
 #: writer that the failed rank left (ADIOS2 aggregates the ranks' data).
-AGREE_GRACE = 120.0
+AGREE_GRACE = 30.0
 #: Exit code of an output fault (the command line's).
 EXIT_OUTPUT = 5
 

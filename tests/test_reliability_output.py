@@ -29,17 +29,18 @@ ENOSPC = "[ADIOS2 EXCEPTION] couldn't write to file data.0 : errno = 28: No spac
 
 
 def _failing_writer(at: int, ranks: tuple[int, ...]):
-    """A VTXWriter whose ``at``-th write raises on ``ranks`` (as ADIOS2 on a full disk)."""
+    """A VTXWriter whose ``at``-th write raises on ``ranks`` after its collective part, as
+    ADIOS2's aggregating rank does on a full disk (the data gathered, the file write failed)."""
     base = dolfinx.io.VTXWriter
 
     class Failing(base):
         writes = 0
 
         def write(self, t: float) -> None:
+            super().write(t)
             Failing.writes += 1
             if Failing.writes == at and MPI.COMM_WORLD.rank in ranks:
                 raise RuntimeError(ENOSPC)
-            super().write(t)
 
     return Failing
 
