@@ -624,13 +624,20 @@ def _disk_try(b: Bench, size: str, ranks: int) -> None:
             if st != "failed" or not status(folder).get("error"):
                 problems.append(f"run.json status {st!r} without the error")
             subprocess.run(["mount", "-o", "remount,size=64m", str(disk)], check=True)
-            problems += resume_check(b, folder, ranks)
+            if "--resume" in p.err:
+                problems += resume_check(b, folder, ranks)
+            elif "start it again" in p.err:  # failed before its first checkpoint
+                again = run(["run", "-q", str(b.scene), "-o", str(disk)], ranks=ranks)
+                problems += [f"again: exit {again.code}"] if again.code else []
+                problems += same_answer(b, folder, ranks)
+            else:
+                problems.append("the line says neither --resume nor start again")
         elif p.code == 0:
             problems += same_answer(b, folder, ranks)
         elif p.code == 2 and not folder.exists():
             pass  # refused before the run: the folder could not be made
         expect = p.code if p.code in (0, 2) else 5
-        record(b, "output", f"{size} disk, {ranks} rank(s), then resume", p, expect, problems)
+        record(b, "output", f"{size} disk, {ranks} rank(s), then continue", p, expect, problems)
     finally:
         _umount(disk)
 

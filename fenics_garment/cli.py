@@ -105,20 +105,19 @@ def _one_line(err: BaseException) -> str:
 
 
 def _continue_command(err, args: argparse.Namespace) -> str:
-    """The command that continues an interrupted run (or starts it again: no checkpoint)."""
+    """The command that continues a stopped run from its checkpoint, or starts it again."""
     import shlex
 
     from fenics_garment._stack import MPI
 
     n = MPI.COMM_WORLD.size
-    launch = f"mpiexec -n {n} " if n > 1 else ""
-    if err.folder is not None and err.checkpoint:
-        return f"continue with `{launch}fenics-garment run --resume {shlex.quote(str(err.folder))}`"
-    if err.folder is not None and args.resume is not None:
-        return f"no checkpoint yet: `{launch}fenics-garment run --resume " \
-               f"{shlex.quote(str(args.resume))}` starts it again"  # fmt: skip
+    launch = f"mpiexec -n {n} fenics-garment run" if n > 1 else "fenics-garment run"
+    folder = getattr(err, "folder", None) or getattr(args, "resume", None)
+    if folder is not None and (err.checkpoint or getattr(args, "resume", None)):
+        return f"continue with `{launch} --resume {shlex.quote(str(folder))}`"
     scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
-    return f"no checkpoint yet: start it again with `{launch}fenics-garment run {scene}`"
+    out = f" -o {shlex.quote(args.output)}" if getattr(args, "output", None) else ""
+    return f"no checkpoint yet: start it again with `{launch} {scene}{out}`"
 
 
 def _interrupted(err, args: argparse.Namespace) -> str:
@@ -152,10 +151,10 @@ def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
     except _input_errors() as err:
         return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
     except OutputError as err:
-        where = err.folder or "<run folder>"
-        hint = ("; nothing half-written is left: free space (or fix the permissions) and "
-                f"continue with `fenics-garment run --resume {where}`")  # fmt: skip
-        return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint)
+        hint = ("; nothing half-written is left (run.json says what failed): free space (or "
+                "fix the permissions) and ")  # fmt: skip
+        return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint
+                                      + _continue_command(err, args))  # fmt: skip
     except KeyboardInterrupt:
         return mpi_guard.end_together(EXIT_INTERRUPTED, "interrupted; a run continues from "
                                       "its last checkpoint with --resume")  # fmt: skip

@@ -48,9 +48,10 @@ def comfort_band(p_kpa: float) -> str:
 class OutputError(RuntimeError):
     """A file of the run could not be written (full disk, read-only folder, …): nothing
     half-written is left under the file's own name. ``folder``: the run folder (set by the
-    run), to resume from."""
+    run), to resume from when it has a checkpoint (``checkpoint``)."""
 
     folder: Path | None = None
+    checkpoint: bool = False  # whether the run folder has a checkpoint to resume from
 
 
 def describe_os_error(err: OSError) -> str:

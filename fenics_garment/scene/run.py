@@ -364,6 +364,7 @@ def run(
     except output.OutputError as err:
         state.finish("failed", collective=False, error=str(err), stage=interrupt.stage())
         err.folder = err.folder or folder
+        err.checkpoint = checkpoint.exists(err.folder)
         raise
     except interrupt.Interrupted as err:
         err.folder = err.folder or folder
