@@ -657,7 +657,9 @@ def _check(s: Scene) -> None:
 def _no_control_characters(s: Scene) -> None:
     """SceneError for a control character in any string of the scene (a folder, a file name, a
     fabric): it would end up in paths and in the run's own ``scene_used.toml``."""
-    stack: list[tuple[str, Any]] = [("", to_dict(s))]
+    table = to_dict(s)
+    table.pop("name")  # (checked as a folder name, which refuses control characters too)
+    stack: list[tuple[str, Any]] = [("", table)]
     while stack:
         key, value = stack.pop()
         if isinstance(value, dict):
