@@ -259,6 +259,8 @@ def _descendants(pid: int) -> list[int]:
     """Every process started, directly or not, by ``pid``."""
     children: dict[int, list[int]] = {}
     for d in Path("/proc").iterdir():
+        if not d.name.isdigit():
+            continue
         try:
             ppid = int((d / "stat").read_text().rsplit(")", 1)[1].split()[1])
         except (OSError, ValueError, IndexError):
