@@ -95,6 +95,7 @@ def test_a_bad_plotting_backend_is_replaced(monkeypatch, backend, warns):
     assert os.environ["MPLBACKEND"].lower() == "agg"
 
 
+@pytest.mark.slow
 def test_an_ascii_terminal_and_a_bad_backend_in_a_real_process(tmp_path):
     scene = tmp_path / "tube.toml"
     scene.write_text(config.dumps(small_tube()))

@@ -63,7 +63,7 @@ def _scene_file(root: Path) -> str:
     return str(path)
 
 
-def _fails_then_resumes(monkeypatch, capsys, ranks: tuple[int, ...]) -> None:
+def _fails_then_resumes(monkeypatch, capsys, ranks: tuple[int, ...], resume: bool) -> None:
     root = _tmp()
     monkeypatch.setattr(dolfinx.io, "VTXWriter", _failing_writer(3, ranks))
     code = cli.main(["run", "-q", _scene_file(root), "-o", str(root)])
@@ -77,22 +77,29 @@ def _fails_then_resumes(monkeypatch, capsys, ranks: tuple[int, ...]) -> None:
         assert state["status"] == "failed" and "No space left on device" in state["error"]
         _nothing_partial(folder)
     monkeypatch.undo()
+    if not resume:
+        return
     assert cli.main(["run", "-q", "--resume", str(folder)]) == 0
     if MPI.COMM_WORLD.rank == 0:
         assert json.loads((folder / "run.json").read_text())["status"] == "completed"
         assert (folder / "dressing.bp").is_dir()
 
 
+RESUME = [False, pytest.param(True, marks=pytest.mark.slow)]
+
+
 @pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="serial")
-def test_a_vtx_fault_is_exit_5_and_the_run_resumes(monkeypatch, capsys):
-    _fails_then_resumes(monkeypatch, capsys, (0,))
+@pytest.mark.parametrize("resume", RESUME)
+def test_a_vtx_fault_is_exit_5_and_the_run_resumes(monkeypatch, capsys, resume):
+    _fails_then_resumes(monkeypatch, capsys, (0,), resume)
 
 
 @pytest.mark.mpi
 @pytest.mark.skipif(MPI.COMM_WORLD.size != 2, reason="needs mpiexec -n 2")
-def test_a_vtx_fault_of_one_rank_is_decided_by_both(monkeypatch, capsys):
+@pytest.mark.parametrize("resume", RESUME)
+def test_a_vtx_fault_of_one_rank_is_decided_by_both(monkeypatch, capsys, resume):
     """Rank 1's writer fails alone: both ranks end with exit 5 (no rank waits for ever)."""
-    _fails_then_resumes(monkeypatch, capsys, (1,))
+    _fails_then_resumes(monkeypatch, capsys, (1,), resume)
 
 
 @pytest.mark.mpi
