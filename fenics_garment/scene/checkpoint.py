@@ -387,6 +387,10 @@ def restore(built, run_folder: Path, meta: dict) -> Progress:
     """Put the arrays of checkpoint ``meta`` back into ``built``; returns the progress
     (collective: a damaged file on any rank is a ResumeError on every rank)."""
     comm = built.model.geometry.mesh.comm
+    progress = Progress.from_dict(meta["progress"])
+    if wrong := _against_scene(progress, built):
+        raise ResumeError(f"{run_folder}: the checkpoint's progress does not fit the rebuilt "
+                          f"scene: {wrong}; run the scene from the start")  # fmt: skip
     path = _rank_file(Path(run_folder) / FOLDER, meta["checkpoint"], comm.rank)
     targets = _arrays(built)
     saved, message = None, None
@@ -404,4 +408,16 @@ def restore(built, run_folder: Path, meta: dict) -> Progress:
             target[:] = saved[name]
     if "x0" in saved:
         built.contact.state.restore_search_memory({k: saved[k] for k in ("x0", "d0", "n0")})
-    return Progress.from_dict(meta["progress"])
+    return progress
+
+
+def _against_scene(p: Progress, built) -> str:
+    """What in ``p`` contradicts the rebuilt problem (its friction coefficient; an initial
+    shrink below the scene's margin), "" if nothing (the same on every rank)."""
+    mu = float(built.mu.value) if built.mu is not None else 0.0
+    if abs(p.mu - mu) > 1e-12 * max(1.0, abs(mu)):
+        return f"friction coefficient {p.mu:g}, the scene's {mu:g}"
+    margin = built.scene.dressing.margin
+    if any(st.stage == "dress" for st in p.report.steps) and p.report.shrink0 < margin:
+        return f"initial shrink {p.report.shrink0:g} m below the scene's margin {margin:g} m"
+    return ""
