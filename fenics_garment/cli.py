@@ -106,14 +106,21 @@ def _one_line(err: BaseException) -> str:
 
 def _continue_command(err, args: argparse.Namespace) -> str:
     """The command that continues a stopped run from its checkpoint, or starts it again."""
+    folder = getattr(err, "folder", None) or getattr(args, "resume", None)
+    resumable = folder is not None and (err.checkpoint or getattr(args, "resume", None))
+    return continuation(args, folder if resumable else None)
+
+
+def continuation(args: argparse.Namespace, folder: Path | str | None) -> str:
+    """``continue with `… --resume FOLDER``` (a folder with a checkpoint), else the command that
+    starts the run of ``args`` again."""
     import shlex
 
     from fenics_garment._stack import MPI
 
     n = MPI.COMM_WORLD.size
     launch = f"mpiexec -n {n} fenics-garment run" if n > 1 else "fenics-garment run"
-    folder = getattr(err, "folder", None) or getattr(args, "resume", None)
-    if folder is not None and (err.checkpoint or getattr(args, "resume", None)):
+    if folder is not None:
         return f"continue with `{launch} --resume {shlex.quote(str(folder))}`"
     scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
     out = f" -o {shlex.quote(args.output)}" if getattr(args, "output", None) else ""
@@ -184,10 +191,15 @@ def _load_scene(args: argparse.Namespace):
 
 
 def _cmd_run(args: argparse.Namespace) -> int:
+    from fenics_garment import interrupt
     from fenics_garment._stack import MPI
     from fenics_garment.scene.run import exit_code, run
 
     scene = _load_scene(args)
+    folder = Path(args.resume) if args.resume else Path(args.output or scene.output.folder) / \
+        scene.name  # fmt: skip
+    interrupt.continuation = lambda: continuation(args, folder if (
+        folder / "checkpoint" / "progress.json").is_file() else None)  # fmt: skip
     if args.error_bars:
         scene = replace(scene, output=replace(scene.output, error_bars=True))
     if args.check:

@@ -8,7 +8,7 @@ stages), so that a signal delivered to any rank stops all of them at the same pl
 rank left waiting in a collective call. :func:`poll` raises :class:`Interrupted`, which the
 command line turns into one line on rank 0 — the signal, the stage reached and the command that
 continues the run — and the exit code 128 + the signal number (130, 143, 129). A second signal
-before the next poll stops the process at once.
+before the next poll stops the process (every rank) at once, with the same line and code.
 
 gmsh resets SIGINT to its default action while it runs (``gmsh.initialize(interruptible=True)``
 in its Python API): the geometry code calls :func:`reinstall` after every gmsh session.
@@ -25,6 +25,7 @@ import os
 import signal
 import sys
 import threading
+from collections.abc import Callable
 from typing import Any
 
 #: The signals that stop a run cleanly.
@@ -42,7 +43,6 @@ class Interrupted(BaseException):  # (not Exception: no `except Exception` swall
         self.signum, self.stage = signum, stage
         self.folder: Any = None
         self.checkpoint = False
-        self.collective = False  # raised on every rank at once (by poll)
         super().__init__(f"{signal_name(signum)} {stage}")
 
     @property
@@ -57,11 +57,43 @@ def signal_name(signum: int) -> str:
         return f"signal {signum}"
 
 
+#: Called with the line before a second signal stops the process at once (best effort): the
+#: run marks its ``run.json`` "interrupted".
+ON_STOP: list[Callable[[int, str], None]] = []
+
+
+def continuation() -> str:
+    """How to continue the run stopped at once (replaced by the command line's, which knows
+    the run folder and whether it has a checkpoint)."""
+    return "the run continues from its last checkpoint with --resume"
+
+
 def _handler(signum: int, frame: object) -> None:
     global _pending
     if _pending:  # a second signal before the next poll: at once
-        raise Interrupted(signum, _stage)
+        _stop_now(signum)
     _pending = signum
+
+
+def _stop_now(signum: int) -> None:
+    """End the process (the job, on several ranks) with 128 + ``signum`` and one line, from the
+    signal handler: not by an exception, which could surface inside a PETSc callback."""
+    line = (f"interrupted by {signal_name(signum)} a second time {_stage}: stopped at once; "
+            f"{continuation()}")  # fmt: skip
+    for hook in ON_STOP:
+        try:
+            hook(signum, _stage)
+        except Exception:  # best effort: the process ends anyway
+            pass
+    code = 128 + signum
+    if "mpi4py.MPI" in sys.modules:
+        from mpi4py import MPI
+
+        if MPI.Is_initialized() and MPI.COMM_WORLD.size > 1:
+            print(f"error (rank {MPI.COMM_WORLD.rank}): {line}", file=sys.stderr, flush=True)
+            MPI.COMM_WORLD.Abort(code)
+    print(f"error: {line}", file=sys.stderr, flush=True)
+    os._exit(code)
 
 
 def install() -> None:
@@ -103,9 +135,7 @@ def poll(comm: Any) -> None:
     signum = comm.allreduce(_pending, op=_max())
     if signum:
         _pending = 0
-        err = Interrupted(signum, _stage)
-        err.collective = True
-        raise err
+        raise Interrupted(signum, _stage)
 
 
 def _max() -> Any:

@@ -186,10 +186,18 @@ class RunFolder:
     def mark_failed(self, error: str) -> None:
         """``run.json`` says ``failed`` with ``error``, written from any rank (best effort): for
         a rank that stops the job alone (``mpi_guard.abort``), where rank 0 cannot write it."""
+        self._mark(status="failed", error=error)
+
+    def mark_interrupted(self, signum: int, stage: str) -> None:
+        """``run.json`` says ``interrupted`` (a second signal stops the process at once)."""
+        from fenics_garment.interrupt import signal_name
+
+        self._mark(status="interrupted", signal=signal_name(signum), stage=stage)
+
+    def _mark(self, **detail: str) -> None:
         try:
             state = json.loads((self.path / STATE).read_text())
-            state.update(status="failed", error=error,
-                         finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"))  # fmt: skip
+            state.update(finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"), **detail)
             write_state(self.path / STATE, state)
         except (OSError, ValueError, AttributeError):
             pass

@@ -357,6 +357,7 @@ def run(
     state = run_folder.RunFolder(folder, comm)
     state.acquire()
     mpi_guard.ON_ABORT.append(state.mark_failed)
+    interrupt.ON_STOP.append(state.mark_interrupted)
     try:
         state.start(fresh=meta is None, clear=clear)
         result = _run_in(state, scene, recorded, meta, quiet=quiet, first_step=first_step,
@@ -377,6 +378,7 @@ def run(
         raise
     finally:
         mpi_guard.ON_ABORT.remove(state.mark_failed)
+        interrupt.ON_STOP.remove(state.mark_interrupted)
         state.release()
     return result
 
@@ -554,9 +556,8 @@ def solve_stage(
     except output.OutputError:
         frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
         raise
-    except interrupt.Interrupted as err:
-        if err.collective:  # every rank is here (a second signal stops one rank at once)
-            frames.discard(comm)
+    except interrupt.Interrupted:  # (raised by a poll: on every rank at once)
+        frames.discard(comm)
         raise
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
