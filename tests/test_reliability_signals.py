@@ -149,9 +149,14 @@ def whole(tmp_path_factory):
     return scene, _regions(tmp / "tube-on-cylinder")
 
 
+HYDRA = pytest.mark.xfail(strict=True, reason="MPICH's mpiexec (hydra) does not pass SIGHUP on: "
+                         "it ends, and its proxies kill the ranks")  # fmt: skip
+SIGNAL_RANKS = [(signal.SIGINT, 1), (signal.SIGTERM, 1), (signal.SIGHUP, 1), (signal.SIGINT, 2),
+                (signal.SIGTERM, 2), pytest.param(signal.SIGHUP, 2, marks=HYDRA)]  # fmt: skip
+
+
 @pytest.mark.slow
-@pytest.mark.parametrize("ranks", [1, 2])
-@pytest.mark.parametrize("sig", [signal.SIGINT, signal.SIGTERM, signal.SIGHUP])
+@pytest.mark.parametrize("sig, ranks", SIGNAL_RANKS)
 def test_a_signalled_process_resumes_to_the_same_answer(whole, tmp_path, sig, ranks):
     scene, regions = whole
     folder = tmp_path / "tube-on-cylinder"
