@@ -152,7 +152,7 @@ def _mount(where: Path, size: str) -> bool:
 @pytest.mark.slow
 @pytest.mark.skipif(MPI.COMM_WORLD.size > 1, reason="runs its own processes")
 @pytest.mark.parametrize("ranks", [1, 2])
-@pytest.mark.parametrize("size", ["600k", "2600k"])  # a checkpoint; the VTX series fails
+@pytest.mark.parametrize("size", ["600k", "1200k", "2600k"])  # before, at, after a checkpoint
 def test_a_real_full_disk_then_resume(tmp_path, ranks, size):
     disk = tmp_path / "disk"
     if not _mount(disk, size):
@@ -169,8 +169,11 @@ def test_a_real_full_disk_then_resume(tmp_path, ranks, size):
         assert json.loads((folder / "run.json").read_text())["status"] == "failed"
         _nothing_partial(folder)
         subprocess.run(["mount", "-o", "remount,size=64m", str(disk)], check=True)
-        p = subprocess.run([*cmd, "--resume", str(folder)], env=env, capture_output=True,
-                           text=True, timeout=600)  # fmt: skip
+        resumable = (folder / "checkpoint" / "progress.json").exists()
+        assert ("--resume" in lines[0]) == resumable and ("start it again" in lines[0]) != (
+            resumable)  # fmt: skip
+        again = ["--resume", str(folder)] if resumable else [_scene_file(tmp_path), "-o", str(disk)]
+        p = subprocess.run([*cmd, *again], env=env, capture_output=True, text=True, timeout=600)
         assert p.returncode == 0, p.stderr[-3000:]
     finally:
         subprocess.run(["umount", "-l", str(disk)], capture_output=True)
