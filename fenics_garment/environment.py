@@ -103,10 +103,16 @@ def _tolerant_stdio() -> None:
             reconfigure(errors="replace")
 
 
+def ensure_home() -> str | None:
+    """Set ``HOME`` to a folder that exists (:func:`_home`); the warning, or None. Called by
+    :mod:`fenics_garment._stack` too, so that a program using the package without its command
+    line does not crash in ADIOS2 either."""
+    home, warning = _home()
+    os.environ["HOME"] = home
+    return warning
+
+
 def prepare() -> list[str]:
     """Make the environment safe (the module doc); the warnings to print."""
     _tolerant_stdio()
-    home, warning = _home()
-    os.environ["HOME"] = home
-    warnings = [w for w in (warning, _cache(), _backend()) if w]
-    return warnings
+    return [w for w in (ensure_home(), _cache(), _backend()) if w]
