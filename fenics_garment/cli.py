@@ -190,16 +190,22 @@ def _load_scene(args: argparse.Namespace):
     return config.load(args.scene)
 
 
+def _resumable(args: argparse.Namespace, scene) -> Path | None:
+    """The run folder of ``args`` when it has a checkpoint, else None."""
+    from fenics_garment.scene import checkpoint
+
+    root = Path(args.output or scene.output.folder)
+    folder = Path(args.resume) if args.resume else root / scene.name
+    return folder if checkpoint.exists(folder) else None
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
     from fenics_garment import interrupt
     from fenics_garment._stack import MPI
     from fenics_garment.scene.run import exit_code, run
 
     scene = _load_scene(args)
-    folder = Path(args.resume) if args.resume else Path(args.output or scene.output.folder) / \
-        scene.name  # fmt: skip
-    interrupt.continuation = lambda: continuation(args, folder if (
-        folder / "checkpoint" / "progress.json").is_file() else None)  # fmt: skip
+    interrupt.continuation = lambda: continuation(args, _resumable(args, scene))
     if args.error_bars:
         scene = replace(scene, output=replace(scene.output, error_bars=True))
     if args.check:
