@@ -433,6 +433,8 @@ LIES: list[tuple[str, Callable[[Path], None]]] = [
         f, _set("depends.fenics-garment version", "0.0.9"), reseal=True)),
     ("other meshes (resealed)", lambda f: _edit(f, _set("depends.meshes", "0" * 16),
                                                  reseal=True)),
+    ("other friction coefficient (resealed)", lambda f: _edit(f, _set("progress.mu", 0.05),
+                                                               reseal=True)),
     ("rank file byte flipped", _flip),
     ("rank file rewritten, q x 1.01", _scale_q),
 ]  # fmt: skip

@@ -131,6 +131,9 @@ EDITS = [
                  "fenics-garment version changed (0.0.1 then", id="version"),
     pytest.param(lambda m: m["depends"].update(meshes="0" * 16), True, "meshes changed",
                  id="meshes", marks=SLOW),
+    pytest.param(lambda m: m["progress"].update(mu=0.05), True,
+                 "does not fit the rebuilt scene: friction coefficient 0.05", id="friction",
+                 marks=SLOW),
 ]  # fmt: skip
 
 
