@@ -112,8 +112,8 @@ def _continue_command(err, args: argparse.Namespace) -> str:
 
 
 def continuation(args: argparse.Namespace, folder: Path | str | None) -> str:
-    """``continue with `… --resume FOLDER``` (a folder with a checkpoint), else the command that
-    starts the run of ``args`` again."""
+    """``continue with `… --resume FOLDER``` (a folder with a checkpoint), else ``start it again
+    with `…``` (the run of ``args``)."""
     import shlex
 
     from fenics_garment._stack import MPI
@@ -124,7 +124,7 @@ def continuation(args: argparse.Namespace, folder: Path | str | None) -> str:
         return f"continue with `{launch} --resume {shlex.quote(str(folder))}`"
     scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
     out = f" -o {shlex.quote(args.output)}" if getattr(args, "output", None) else ""
-    return f"no checkpoint yet: start it again with `{launch} {scene}{out}`"
+    return f"start it again with `{launch} {scene}{out}` (no checkpoint yet)"
 
 
 def _interrupted(err, args: argparse.Namespace) -> str:
@@ -159,7 +159,7 @@ def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
         return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
     except OutputError as err:
         hint = ("; nothing half-written is left (run.json says what failed): free space (or "
-                "fix the permissions) and ")  # fmt: skip
+                "fix the permissions), then ")  # fmt: skip
         return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint
                                       + _continue_command(err, args))  # fmt: skip
     except KeyboardInterrupt:
