@@ -718,14 +718,15 @@ def main(argv: list[str] | None = None) -> int:
     chosen = argv or list(CLASSES)
     work = Path(tempfile.mkdtemp(prefix="reliability-"))
     b = Bench(work, write_scene(work))
+    records = [Result(**r) for r in json.loads(RESULTS.read_text())] if RESULTS.exists() else []
     try:
-        for klass in chosen:
+        for klass in chosen:  # a class's records replace its old ones as soon as it ends
             TRIES[klass](b)
+            records = [r for r in records if r.klass != klass]
+            records += [r for r in b.results if r.klass == klass]
+            write(sorted(records, key=lambda r: CLASSES.index(r.klass)))
     finally:
         shutil.rmtree(work, ignore_errors=True)
-    old = json.loads(RESULTS.read_text()) if RESULTS.exists() else []
-    kept = [Result(**r) for r in old if r["klass"] not in chosen]
-    write(sorted(kept + b.results, key=lambda r: CLASSES.index(r.klass)))
     print(table(b.results))
     return 0
 
