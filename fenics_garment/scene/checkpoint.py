@@ -7,8 +7,10 @@ A checkpoint lives in ``<run folder>/checkpoint/``:
   multipliers ``lam`` (augmented Lagrangian) and ``u_old`` (friction: the position of the last
   converged step), and the broad phase's last exact search (``x0``, ``d0``, ``n0``);
 * ``progress.json`` — the number ``k`` of the latest complete checkpoint, the ranks, a
-  fingerprint of the scene and the dressing's :class:`~fenics_garment.scene.dressing.Progress`
-  (stage, shrink, step, spring constant, the report so far).
+  fingerprint of the scene, what the state depends on besides it (:func:`depends`: package
+  version, terms hooks' sources, input files, meshes), the SHA-256 of every rank file and the
+  dressing's :class:`~fenics_garment.scene.dressing.Progress` (stage, shrink, step, spring
+  constant, the report so far); sealed by a SHA-256 of all that (:func:`seal`).
 
 Every file is written to a temporary name and renamed (``output.atomic_write``); the rank files
 of checkpoint ``k`` are all in place before ``progress.json`` names ``k``, and those of ``k − 1``
@@ -17,7 +19,10 @@ Resuming re-builds the scene (deterministic: same meshes, same partition on the 
 ranks), puts the arrays back and replays the remaining steps, so the answer is the one of the
 uninterrupted run. A different scene or number of ranks is refused with :class:`ResumeError`,
 and so is a damaged checkpoint (truncated or missing rank files, unknown keys, values of the
-wrong type or shape): reading and restoring are collective, so every rank raises the same error.
+wrong type or shape), one that lies (values of the right type that no dressing has,
+:func:`meaning`; a file changed after it was written: the seal or a digest does not match) and
+one whose dependencies changed (:func:`check_depends`, one line naming what): reading and
+restoring are collective, so every rank raises the same error.
 A checkpoint that cannot be written (full disk, read-only folder) raises
 :class:`~fenics_garment.output.OutputError` on every rank, leaving the previous one intact.
 """
