@@ -136,7 +136,7 @@ def verdict(p: Proc, expect: int, problems: list[str]) -> tuple[str, str]:
     """(outcome, detail) of a process expected to exit ``expect`` with ``problems`` found by
     the try's own checks (empty: all held)."""
     lines = error_lines(p.err)
-    head = lines[0][:160] if lines else ""
+    head = lines[0] if lines else ""
     if p.code is None:
         return "hang", f"no exit in {TIMEOUT:.0f} s"
     if p.code == 1 or "internal error" in p.err or "Traceback" in p.err:
@@ -157,6 +157,7 @@ def verdict(p: Proc, expect: int, problems: list[str]) -> tuple[str, str]:
 
 def record(b: Bench, klass: str, name: str, p: Proc, expect: int, problems: list[str]) -> None:
     outcome, detail = verdict(p, expect, problems)
+    detail = detail.replace(str(b.work), "<work>")[:240]
     b.results.append(Result(klass, name, outcome, detail, round(p.seconds, 1)))
     print(f"  {klass:<12} {name:<44} {outcome:<15} {p.seconds:6.1f} s  {detail[:110]}",
           flush=True)  # fmt: skip
@@ -696,7 +697,8 @@ def table(results: list[Result]) -> str:
 def _plain(r: Result) -> dict:
     """The record, its working folder written as <work> (the machine's paths are not data)."""
     d = asdict(r)
-    d["detail"] = re.sub(r"/\S*/reliability-[^/\s]+", "<work>", d["detail"])
+    d["detail"] = re.sub(r"/tmp/\S*$", "<work>…", re.sub(r"/\S*/reliability-[^/\s]+", "<work>",
+                                                         d["detail"]))  # fmt: skip
     return d
 
 
