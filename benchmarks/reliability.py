@@ -357,7 +357,7 @@ def try_signals(b: Bench) -> None:
     problems = same_answer(b, out / FOLDER, 1)
     if status(out / FOLDER).get("status") != "completed":
         problems.append("run.json not completed")
-    record(b, k, "stdout closed by its reader (| head -1)", p, 0, problems)
+    record(b, k, "stdout closed by its reader (as head -1 does)", p, 0, problems)
 
 
 # -- checkpoints that lie ---------------------------------------------------------------------
@@ -690,7 +690,8 @@ def table(results: list[Result]) -> str:
         rows.append(f"| {name} | {len(mine) - counts[-1]} | " + " | ".join(map(str, counts))
                     + " |")  # fmt: skip
     rows += ["", "| class | try | outcome | s |", "|---|---|---|---|"]
-    rows += [f"| {r.klass} | {r.name} | {r.outcome} | {r.seconds:.0f} |" for r in results]
+    rows += [f"| {r.klass} | {r.name.replace('|', '/')} | {r.outcome} | {r.seconds:.0f} |"
+             for r in results]  # fmt: skip
     return "\n".join(rows)
 
 
