@@ -343,21 +343,28 @@ def try_signals(b: Bench) -> None:
     q.send_signal(signal.SIGINT)
     p = finish(q, t0)
     record(b, k, "SIGINT twice", p, 130, [])
-    out = b.work / "sig-pipe"
+    for ranks in (1, 2):
+        _closed_stdout(b, ranks)
+
+
+def _closed_stdout(b: Bench, ranks: int) -> None:
+    """The run's reader goes away after the first line, as ``| head -1`` does."""
+    out = b.work / f"sig-pipe-{ranks}"
     t0 = time.monotonic()
-    q = start(["run", str(b.scene), "-o", str(out)])
+    q = start(["run", str(b.scene), "-o", str(out)], ranks=ranks)
     q.stdout.readline()
-    q.stdout.close()  # the reader is gone, as `| head -1` leaves it
+    q.stdout.close()
     try:
         q.wait(timeout=TIMEOUT)
         p = Proc(q.returncode, "", q.stderr.read(), time.monotonic() - t0)
     except subprocess.TimeoutExpired:
         os.killpg(q.pid, signal.SIGKILL)
         p = Proc(None, "", "", TIMEOUT)
-    problems = same_answer(b, out / FOLDER, 1)
+    problems = same_answer(b, out / FOLDER, ranks)
     if status(out / FOLDER).get("status") != "completed":
         problems.append("run.json not completed")
-    record(b, k, "stdout closed by its reader (as head -1 does)", p, 0, problems)
+    record(b, "signals", f"stdout closed by its reader (as head -1 does), {ranks} rank(s)", p, 0,
+           problems)  # fmt: skip
 
 
 # -- checkpoints that lie ---------------------------------------------------------------------
