@@ -15,6 +15,10 @@ from __future__ import annotations
 
 import importlib.util
 
+from fenics_garment.environment import ensure_home
+
+ensure_home()  # ADIOS2 crashes (SIGSEGV) looking for its configuration when HOME is unset
+
 STACK: str
 if importlib.util.find_spec("dolfinx_solver") is not None:
     import dolfinx_solver  # noqa: F401  (side effect: loads the wheel's MPI before anything else)

@@ -78,7 +78,7 @@ def _cmd_demo(args: argparse.Namespace) -> int:
     return demos.REGISTRY[name].run(Path(args.output), quiet=args.quiet)
 
 
-#: Exit codes (documented in ``run --help`` and the README).
+#: Exit codes (documented in ``run --help`` and the README); a signal s: 128 + s.
 EXIT_INTERNAL, EXIT_INPUT, EXIT_OUTPUT, EXIT_INTERRUPTED = 1, 2, 5, 130
 
 
@@ -95,26 +95,74 @@ def _input_errors() -> tuple[type[Exception], ...]:
             PetscOptionError)  # fmt: skip
 
 
+#: Characters of an error line (an echoed value is cut well before; this is the last guard).
+LINE = 1000
+
+
 def _one_line(err: BaseException) -> str:
-    return " ".join(str(err).split()) or type(err).__name__
+    from fenics_garment.bounded import cut
+
+    return cut(" ".join(str(err).split()), LINE) or type(err).__name__
 
 
-def _run_guarded(args: argparse.Namespace) -> int:
+def _continue_command(err, args: argparse.Namespace) -> str:
+    """The command that continues a stopped run from its checkpoint, or starts it again."""
+    folder = getattr(err, "folder", None) or getattr(args, "resume", None)
+    resumable = folder is not None and (err.checkpoint or getattr(args, "resume", None))
+    return continuation(args, folder if resumable else None)
+
+
+def continuation(args: argparse.Namespace, folder: Path | str | None) -> str:
+    """``continue with `… --resume FOLDER``` (a folder with a checkpoint), else ``start it again
+    with `…``` (the run of ``args``)."""
+    import shlex
+
+    from fenics_garment._stack import MPI
+
+    n = MPI.COMM_WORLD.size
+    launch = f"mpiexec -n {n} fenics-garment run" if n > 1 else "fenics-garment run"
+    if folder is not None:
+        return f"continue with `{launch} --resume {shlex.quote(str(folder))}`"
+    scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
+    out = f" -o {shlex.quote(args.output)}" if getattr(args, "output", None) else ""
+    return f"start it again with `{launch} {scene}{out}` (no checkpoint yet)"
+
+
+def _interrupted(err, args: argparse.Namespace) -> str:
+    from fenics_garment.interrupt import signal_name
+
+    if getattr(args, "func", None) is not _cmd_run:
+        return f"interrupted by {signal_name(err.signum)} {err.stage}"
+    return f"interrupted by {signal_name(err.signum)} {err.stage}; " + _continue_command(err, args)
+
+
+def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
     """``args.func(args)`` with every error turned into one line and an exit code; an error on
     one MPI rank ends every rank (:mod:`fenics_garment.mpi_guard`)."""
-    from fenics_garment import mpi_guard
+    from fenics_garment import interrupt, mpi_guard
+    from fenics_garment._stack import MPI
     from fenics_garment.output import OutputError
 
     mpi_guard.setup()
+    interrupt.install()  # after the stack: PETSc's own handlers abort with code 59
+    if MPI.COMM_WORLD.rank == 0:
+        for warning in warnings:
+            print(f"warning: {warning}", file=sys.stderr, flush=True)
     try:
-        return int(args.func(args))
+        interrupt.set_stage("before the run started")
+        code = int(args.func(args))
+        interrupt.set_stage("after the command had finished (its outputs are complete)")
+        interrupt.poll(MPI.COMM_WORLD)
+        return code
+    except interrupt.Interrupted as err:
+        return mpi_guard.end_together(err.code, _interrupted(err, args))
     except _input_errors() as err:
         return mpi_guard.end_together(EXIT_INPUT, _one_line(err))
     except OutputError as err:
-        where = err.folder or "<run folder>"
-        hint = ("; nothing half-written is left: free space (or fix the permissions) and "
-                f"continue with `fenics-garment run --resume {where}`")  # fmt: skip
-        return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint)
+        hint = ("; nothing half-written is left (run.json says what failed): free space (or "
+                "fix the permissions), then ")  # fmt: skip
+        return mpi_guard.end_together(EXIT_OUTPUT, _one_line(err) + hint
+                                      + _continue_command(err, args))  # fmt: skip
     except KeyboardInterrupt:
         return mpi_guard.end_together(EXIT_INTERRUPTED, "interrupted; a run continues from "
                                       "its last checkpoint with --resume")  # fmt: skip
@@ -143,11 +191,22 @@ def _load_scene(args: argparse.Namespace):
     return config.load(args.scene)
 
 
+def _resumable(args: argparse.Namespace, scene) -> Path | None:
+    """The run folder of ``args`` when it has a checkpoint, else None."""
+    from fenics_garment.scene import checkpoint
+
+    root = Path(args.output or scene.output.folder)
+    folder = Path(args.resume) if args.resume else root / scene.name
+    return folder if checkpoint.exists(folder) else None
+
+
 def _cmd_run(args: argparse.Namespace) -> int:
+    from fenics_garment import interrupt
     from fenics_garment._stack import MPI
     from fenics_garment.scene.run import exit_code, run
 
     scene = _load_scene(args)
+    interrupt.continuation = lambda: continuation(args, _resumable(args, scene))
     if args.error_bars:
         scene = replace(scene, output=replace(scene.output, error_bars=True))
     if args.check:
@@ -256,7 +315,9 @@ def build_parser() -> argparse.ArgumentParser:
         "outputs of the last converged state are written); 4 done, but a result check "
         "(penetration, spring, force balance, contact area) failed: a WARNING each, see "
         "'checks' in summary.json; 5 a file could not be written (disk full, read-only "
-        "folder): free space and --resume; 130 interrupted.",
+        "folder; the line says what failed, run.json too): free space and --resume; 129, "
+        "130, 143 stopped by SIGHUP, SIGINT (Ctrl-C), SIGTERM: the line names the stage "
+        'reached and the command that continues the run; run.json says "interrupted".',
     )
     p_run.add_argument("scene", nargs="?",
                        help="scene file, e.g. demos/cotton_gilet.toml (optional with --resume: "
@@ -306,13 +367,27 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+def _release_objects() -> None:
+    """Free a stopped run's objects (reference cycles) while their libraries are loaded: at
+    interpreter exit nanobind reports those it finds as leaks, many lines on stderr."""
+    import gc
+
+    gc.collect()
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     if args.command is None:
         parser.print_help()
         return 0
-    return _run_guarded(args)
+    from fenics_garment import environment, interrupt
+
+    warnings = environment.prepare()  # before the stack is loaded (HOME, JIT cache, backend)
+    interrupt.tolerate_closed_output()
+    code = _run_guarded(args, warnings)
+    _release_objects()
+    return code
 
 
 if __name__ == "__main__":

@@ -33,14 +33,18 @@ def setup() -> None:
         _comm = MPI.COMM_WORLD.Dup()
 
 
-def _all_failed(comm: MPI.Comm, grace: float) -> bool:
-    req = comm.Ibarrier()
+def wait(req: MPI.Request, grace: float) -> bool:
+    """Whether the non-blocking request ``req`` completes within ``grace`` seconds."""
     t0 = time.monotonic()
     while not req.Test():
         if time.monotonic() - t0 > grace:
             return False
         time.sleep(0.01)
     return True
+
+
+def _all_failed(comm: MPI.Comm, grace: float) -> bool:
+    return wait(comm.Ibarrier(), grace)
 
 
 def end_together(code: int, message: str, *, grace: float = GRACE) -> int:
@@ -54,6 +58,22 @@ def end_together(code: int, message: str, *, grace: float = GRACE) -> int:
         if world.rank == 0:
             print(f"error: {message}", file=sys.stderr, flush=True)
         return code
+    return abort(code, message)
+
+
+#: Called with the message by :func:`abort` before the job ends (best effort: e.g. to mark the
+#: run folder's ``run.json`` failed from this rank, where rank 0 cannot).
+ON_ABORT: list = []
+
+
+def abort(code: int, message: str) -> int:
+    """Print ``message`` marked with this rank and end every rank of the job with ``code``."""
+    world = MPI.COMM_WORLD
+    for hook in ON_ABORT:
+        try:
+            hook(message)
+        except Exception:  # best effort: the job ends anyway
+            pass
     print(f"error (rank {world.rank} of {world.size}; the other ranks are stopped): {message}",
           file=sys.stderr, flush=True)  # fmt: skip
     time.sleep(DRAIN)

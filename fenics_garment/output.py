@@ -48,9 +48,10 @@ def comfort_band(p_kpa: float) -> str:
 class OutputError(RuntimeError):
     """A file of the run could not be written (full disk, read-only folder, …): nothing
     half-written is left under the file's own name. ``folder``: the run folder (set by the
-    run), to resume from."""
+    run), to resume from when it has a checkpoint (``checkpoint``)."""
 
     folder: Path | None = None
+    checkpoint: bool = False  # whether the run folder has a checkpoint to resume from
 
 
 def describe_os_error(err: OSError) -> str:
@@ -59,9 +60,39 @@ def describe_os_error(err: OSError) -> str:
     return f"cannot write{where}: {err.strerror or type(err).__name__}"
 
 
+#: Seconds a rank with an output error waits for every other rank to reach the decision
+#: (:func:`agree`) before it stops the job: another rank may be stuck in a collective call of a
+#: writer that the failed rank left (ADIOS2 aggregates the ranks' data).
+AGREE_GRACE = 30.0
+#: Exit code of an output fault (the command line's).
+EXIT_OUTPUT = 5
+
+
+def agree(comm, message: str | None, *, grace: float = AGREE_GRACE) -> str | None:
+    """One decision of every rank on an output error (collective): the first rank's message,
+    or None when no rank failed. A rank with an error waits at most ``grace`` seconds for the
+    others, then prints its message and ends the job with :data:`EXIT_OUTPUT`; so no rank
+    waits for ever in its next collective call for a rank that gave up."""
+    if comm.size == 1:
+        return message
+    from fenics_garment import mpi_guard
+    from fenics_garment._stack import MPI
+
+    flag, anyone = np.array([int(message is not None)], np.int32), np.zeros(1, np.int32)
+    req = comm.Iallreduce(flag, anyone, op=MPI.MAX)
+    if message is None:
+        req.Wait()
+    elif not mpi_guard.wait(req, grace):
+        mpi_guard.abort(EXIT_OUTPUT, f"{message}; another rank did not answer within "
+                        f"{grace:.0f} s")  # fmt: skip
+    if not anyone[0]:
+        return None
+    return next(m for m in comm.allgather(message) if m)
+
+
 def guarded(comm, work: Callable[[], object], *, root_only: bool = True) -> None:
     """Run ``work()`` on rank 0 (``root_only``) or on every rank; an ``OSError`` on any rank
-    becomes an :class:`OutputError` on every rank (collective: no rank is left waiting)."""
+    becomes an :class:`OutputError` on every rank (collective: :func:`agree`)."""
     message = None
     if comm.rank == 0 or not root_only:
         try:
@@ -71,7 +102,7 @@ def guarded(comm, work: Callable[[], object], *, root_only: bool = True) -> None
     if root_only:
         message = comm.bcast(message, root=0)
     else:
-        message = next((m for m in comm.allgather(message) if m), None)
+        message = agree(comm, message)
     if message:
         raise OutputError(message)
 
@@ -83,6 +114,9 @@ def atomic_write(path: Path, write: Callable[[Path], None]) -> Path:
     try:
         write(tmp)
         os.replace(tmp, path)
+    except OSError as err:
+        err.filename = err.filename or str(path)  # (a writer's error may not name its file)
+        raise
     finally:
         if tmp.exists():
             tmp.unlink()

@@ -171,5 +171,5 @@ def test_scene_file_not_utf8(tmp_path):
     p.write_bytes(b'name = "a\xff"\n')
     with pytest.raises(config.SceneError, match=r"scene.toml: not a UTF-8 text file"):
         config.load(p)
-    with pytest.raises(config.SceneError, match=r"cannot read"):
+    with pytest.raises(config.SceneError, match=r"a folder, not a scene file"):
         config.load(tmp_path)  # a directory

@@ -126,6 +126,7 @@ def test_resume_refuses_another_number_of_ranks(reference, tmp_path):
         meta_path = folder / "checkpoint" / "progress.json"
         meta = json.loads(meta_path.read_text())
         meta["ranks"] = comm.size + 1
+        meta["seal"] = checkpoint.seal(meta)  # a consistent checkpoint of another rank count
         meta_path.write_text(json.dumps(meta))
     comm.Barrier()
     with pytest.raises(ResumeError, match=rf"written by {comm.size + 1} MPI rank.*mpiexec -n"):

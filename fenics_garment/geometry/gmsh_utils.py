@@ -13,6 +13,8 @@ from typing import Any
 
 import gmsh
 
+from fenics_garment import interrupt
+
 
 @contextmanager
 def gmsh_session(
@@ -28,7 +30,7 @@ def gmsh_session(
         return
     owner = not gmsh.isInitialized()
     if owner:
-        gmsh.initialize(["-noenv"], readConfigFiles=False)
+        gmsh.initialize(["-noenv"], readConfigFiles=False, interruptible=False)
     gmsh.option.setNumber("General.Terminal", 1 if verbose else 0)
     gmsh.option.setNumber("General.Verbosity", 5 if verbose else 1)
     gmsh.model.add(name)
@@ -40,6 +42,7 @@ def gmsh_session(
         finally:
             if owner:
                 gmsh.finalize()
+            interrupt.reinstall()  # gmsh's Python API resets SIGINT to its default action
 
 
 def to_dolfinx(comm: Any, model: Any | None, rank: int = 0, gdim: int = 3) -> Any:

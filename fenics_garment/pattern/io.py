@@ -87,6 +87,8 @@ from typing import Any
 
 import numpy as np
 
+from fenics_garment import bounded
+
 from .model import (
     UNITS,
     Arc,
@@ -130,6 +132,7 @@ DART_KEYS = {"a", "b", "reversed", "name"}
 def read_pattern(path: str | Path, *, seam_tolerance: float = 0.02) -> Pattern:
     """Read a pattern file by its suffix (module docstring), validated, outlines CCW."""
     path = Path(path)
+    _check_file(path)
     suffix = path.suffix.lower()
     if suffix == ".dxf":
         from .dxf import read_dxf
@@ -145,14 +148,29 @@ def read_pattern(path: str | Path, *, seam_tolerance: float = 0.02) -> Pattern:
     return pattern_from_data(data, source=str(path), seam_tolerance=seam_tolerance)
 
 
+def _check_file(path: Path) -> None:
+    """PatternError unless ``path`` is a regular file of at most
+    :data:`~fenics_garment.bounded.MAX_PATTERN_BYTES` (a FIFO would block, a device never end)."""
+    try:
+        bounded.check_regular(path, bounded.MAX_PATTERN_BYTES, "pattern")
+    except bounded.BoundError as e:
+        raise PatternError(str(e)) from None
+    except OSError as e:
+        raise PatternError(f"{bounded.cut_path(path)}: cannot read: {_one_line(e)}") from None
+
+
 def load_data(path: Path) -> Any:
     """The parsed TOML or JSON of a file; a syntax error becomes a one-line PatternError."""
     try:
-        if path.suffix.lower() == ".toml":
-            with open(path, "rb") as f:
-                return tomllib.load(f)
-        with open(path, encoding="utf-8") as f:
-            return json.load(f)
+        raw = bounded.read_bytes(path, bounded.MAX_PATTERN_BYTES, "pattern")
+        parse = tomllib.loads if path.suffix.lower() == ".toml" else json.loads
+        data = parse(raw.decode("utf-8"))
+        bounded.check_depth(data, str(path))
+        return data
+    except bounded.BoundError as e:
+        raise PatternError(str(e)) from None
+    except RecursionError:
+        raise PatternError(f"{path}: nested deeper than {bounded.MAX_DEPTH} levels") from None
     except (tomllib.TOMLDecodeError, json.JSONDecodeError, UnicodeDecodeError) as e:
         raise PatternError(f"{path}: not valid {path.suffix[1:].upper()}: {_one_line(e)}") from None
     except OSError as e:

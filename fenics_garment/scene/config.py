@@ -26,7 +26,9 @@ import difflib
 import importlib
 import importlib.util
 import itertools
+import json
 import math
+import re
 import sys
 import tomllib
 import types
@@ -36,6 +38,8 @@ from dataclasses import asdict, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any
 
+from fenics_garment import bounded
+from fenics_garment.bounded import shown
 from fenics_garment.contact.terms import MU_SKIN_COTTON
 from fenics_garment.petsc_options import LINEAR_SOLVERS
 
@@ -45,7 +49,9 @@ class SceneError(ValueError):
 
     def __init__(self, source: str, key: str, message: str):
         self.source, self.key = source, key
+        source, key = bounded.cut_path(source), bounded.cut(key)
         where = f"{source}: " if source else ""
+        message = bounded.cut(message, 1000)
         super().__init__(f"{where}[{key}] {message}" if key else f"{where}{message}")
 
 
@@ -355,16 +361,16 @@ def load_terms(spec: str, source: str = "") -> Callable[[Any], None] | None:
     where, sep, name = spec.rpartition(":")
     if not sep or not where or not name.isidentifier():
         raise SceneError(source, key, f"must be 'module:function' or 'file.py:function', "
-                         f"got {spec!r}")  # fmt: skip
+                         f"got {shown(spec)}")  # fmt: skip
     folder = Path(source).parent if source else Path.cwd()
     try:
         module = _import_terms(where, folder)
     except Exception as err:  # an import error of the user's module, whatever it is
-        raise SceneError(source, key, f"cannot import {where!r}: {type(err).__name__}: "
+        raise SceneError(source, key, f"cannot import {shown(where)}: {type(err).__name__}: "
                          f"{str(err).splitlines()[0] if str(err) else ''}") from err  # fmt: skip
     hook = getattr(module, name, None)
     if not callable(hook):
-        raise SceneError(source, key, f"{where!r} has no function {name!r}")
+        raise SceneError(source, key, f"{shown(where)} has no function {shown(name)}")
     return hook
 
 
@@ -428,7 +434,7 @@ def _convert(value: Any, tp: Any, key: str, src: str) -> Any:
     elif tp is float:
         if isinstance(value, int | float) and not isinstance(value, bool):
             if not math.isfinite(value):
-                raise SceneError(src, key, f"must be a finite number, got {value!r}")
+                raise SceneError(src, key, f"must be a finite number, got {value!r}")  # (a float)
             return float(value)
     elif tp is int:
         if isinstance(value, int) and not isinstance(value, bool):
@@ -437,7 +443,8 @@ def _convert(value: Any, tp: Any, key: str, src: str) -> Any:
         return value
     name = _type_name(tp)
     article = "an" if name[0] in "aeiou" else "a"
-    raise SceneError(src, key, f"must be {article} {name}, got {type(value).__name__} {value!r}")
+    raise SceneError(src, key, f"must be {article} {name}, got {type(value).__name__} "
+                     f"{shown(value)}")  # fmt: skip
 
 
 def _unknown(key: str, known: list[str], where: str, src: str) -> SceneError:
@@ -487,7 +494,7 @@ def _one_of(value: str, allowed: tuple[str, ...], src: str, key: str) -> None:
     if value not in allowed:
         close = difflib.get_close_matches(value, allowed, n=1)
         hint = f" (did you mean '{close[0]}'?)" if close else ""
-        raise SceneError(src, key, f"must be one of {', '.join(allowed)}; got {value!r}{hint}")
+        raise SceneError(src, key, f"must be one of {', '.join(allowed)}; got {shown(value)}{hint}")
 
 
 def _check_ranges(s: Scene) -> None:
@@ -591,7 +598,7 @@ def _check(s: Scene) -> None:
     for e in g.refine_edges if names else ():
         ok = any(map(EdgeRefinement((e,)).selects, names))
         _require(ok, src, "garment.refine_edges",
-                 f"a {g.kind} has no edge {e!r}; its edges: {', '.join(names)} (or a prefix, "
+                 f"a {g.kind} has no edge {shown(e)}; its edges: {', '.join(names)} (or a prefix, "
                  "e.g. 'armhole'; '*' for all)")  # fmt: skip
     eases = g.ease.values() if isinstance(g.ease, dict) else [g.ease]
     for e in eases:
@@ -642,10 +649,29 @@ def _check(s: Scene) -> None:
     o = s.output
     _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
              f"is a sensor's diameter in metres, in (0, 0.2], got {o.sensor_diameter}")  # fmt: skip
+    _no_control_characters(s)
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "
-             f"got {s.name!r}")  # fmt: skip
+             f"got {shown(s.name)}")  # fmt: skip
     _check_ranges(s)
+
+
+def _no_control_characters(s: Scene) -> None:
+    """SceneError for a control character in any string of the scene (a folder, a file name, a
+    fabric): it would end up in paths and in the run's own ``scene_used.toml``."""
+    table = to_dict(s)
+    table.pop("name")  # (checked as a folder name, which refuses control characters too)
+    stack: list[tuple[str, Any]] = [("", table)]
+    while stack:
+        key, value = stack.pop()
+        if isinstance(value, dict):
+            stack += [(f"{key}.{k}" if key else str(k), v) for k, v in value.items()]
+            stack += [(f"{key}.{k}", k) for k in value if isinstance(k, str)]
+        elif isinstance(value, list):
+            stack += [(f"{key}[{i}]", v) for i, v in enumerate(value)]
+        elif isinstance(value, str) and bounded.has_control(value):
+            raise SceneError(s.source, key, f"has a control character (a newline, a tab, an "
+                             f"escape, …): {shown(value)}")  # fmt: skip
 
 
 def _plain_name(name: str) -> bool:
@@ -675,19 +701,42 @@ def _replace_source(scene: Scene, source: str) -> Scene:
 
 
 def load(path: str | Path) -> Scene:
-    """Read and validate a scene file; :class:`SceneError` names the file and the key."""
+    """Read and validate a scene file; :class:`SceneError` names the file and the key.
+
+    The file must be a regular file of at most :data:`~fenics_garment.bounded.MAX_SCENE_BYTES`,
+    its tables nested at most :data:`~fenics_garment.bounded.MAX_DEPTH` deep, and it must set
+    something (an empty file is refused: it would dress the default scene without a word)."""
     path = Path(path)
-    try:
-        data = tomllib.loads(path.read_text())
-    except FileNotFoundError:
-        raise SceneError(str(path), "", "no such scene file") from None
-    except UnicodeDecodeError as err:
-        raise SceneError(str(path), "", f"not a UTF-8 text file (byte {err.start})") from None
-    except OSError as err:
-        raise SceneError(str(path), "", f"cannot read: {err.strerror or err}") from None
-    except tomllib.TOMLDecodeError as err:
-        raise SceneError(str(path), "", f"not valid TOML: {err}") from None
+    where = bounded.cut_path(path)
+    if bounded.has_control(str(path)):
+        raise SceneError(bounded.cut_path(repr(str(path))), "", "the scene file's path has a "
+                         "control character (a newline, a tab, …): rename it")  # fmt: skip
+    data = _parse(path, where)
+    if not data:
+        raise SceneError(where, "", "empty scene file: nothing to dress (give at least its "
+                         "name and [garment]; see demos/ for complete scenes)")  # fmt: skip
     return from_dict(data, str(path))
+
+
+def _parse(path: Path, where: str) -> dict:
+    """The TOML table of the scene file, bounded (:func:`load`)."""
+    try:
+        raw = bounded.read_bytes(path, bounded.MAX_SCENE_BYTES, "scene")
+        data = tomllib.loads(raw.decode("utf-8"))
+        bounded.check_depth(data, str(path))
+    except FileNotFoundError:
+        raise SceneError(where, "", "no such scene file") from None
+    except UnicodeDecodeError as err:
+        raise SceneError(where, "", f"not a UTF-8 text file (byte {err.start})") from None
+    except OSError as err:
+        raise SceneError(where, "", f"cannot read: {err.strerror or err}") from None
+    except tomllib.TOMLDecodeError as err:
+        raise SceneError(where, "", f"not valid TOML: {bounded.cut(str(err), 200)}") from None
+    except RecursionError:
+        raise SceneError(where, "", f"nested deeper than {bounded.MAX_DEPTH} levels") from None
+    except bounded.BoundError as err:
+        raise SceneError("", "", str(err)) from None
+    return data
 
 
 def to_dict(scene: Scene) -> dict:
@@ -702,21 +751,26 @@ def _toml_value(v: Any) -> str:
         return "true" if v else "false"
     if isinstance(v, int | float):
         return repr(v)
-    if isinstance(v, str):
-        return '"' + v.replace("\\", "\\\\").replace('"', '\\"') + '"'
+    if isinstance(v, str):  # a TOML basic string: JSON's escapes are TOML's, DEL too
+        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
     if isinstance(v, list):
         return "[" + ", ".join(_toml_value(x) for x in v) + "]"
     if isinstance(v, dict):
-        return "{ " + ", ".join(f"{k} = {_toml_value(x)}" for k, x in v.items()) + " }"
+        return "{ " + ", ".join(f"{_toml_key(k)} = {_toml_value(x)}" for k, x in v.items()) + " }"
     raise TypeError(f"cannot write {v!r} to TOML")
+
+
+def _toml_key(k: str) -> str:
+    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _toml_value(k)
 
 
 def dumps(scene: Scene) -> str:
     """TOML text of the scene used (defaults filled in); :func:`load` reads it back equal."""
     d = to_dict(scene)
-    lines = [f"# scene used for this run (defaults filled in); from {scene.source or '-'}",
+    source = bounded.cut(repr(scene.source)[1:-1], 300) if scene.source else "-"
+    lines = [f"# scene used for this run (defaults filled in); from {source}",
              f"name = {_toml_value(d.pop('name'))}"]  # fmt: skip
     for section, table in d.items():
         lines += ["", f"[{section}]"]
-        lines += [f"{k} = {_toml_value(v)}" for k, v in table.items()]
+        lines += [f"{_toml_key(k)} = {_toml_value(v)}" for k, v in table.items()]
     return "\n".join(lines) + "\n"

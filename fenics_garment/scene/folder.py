@@ -149,12 +149,14 @@ class RunFolder:
 
         self._collective(work)
 
-    def finish(self, status: str, *, collective: bool = True) -> None:
-        """Write the final ``status``. ``collective=False`` (on an error path, where the other
-        ranks may be anywhere): rank 0 only, best effort, never raises."""
+    def finish(self, status: str, *, collective: bool = True, **detail: str) -> None:
+        """Write the final ``status`` (and ``detail``: what failed, the signal and stage of an
+        interruption). ``collective=False`` (on an error path, where the other ranks may be
+        anywhere): rank 0 only, best effort, never raises."""
 
         def work() -> None:
-            self.state.update(status=status, finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"))
+            self.state.update(status=status, finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+                              **detail)  # fmt: skip
             self._write()
 
         if collective:
@@ -180,7 +182,46 @@ class RunFolder:
         return state if isinstance(state, dict) else {}
 
     def _write(self) -> None:
-        output.write_text(self.path / STATE, json.dumps(self.state, indent=1))
+        write_state(self.path / STATE, self.state)
+
+    def mark_failed(self, error: str) -> None:
+        """``run.json`` says ``failed`` with ``error``, written from any rank (best effort): for
+        a rank that stops the job alone (``mpi_guard.abort``), where rank 0 cannot write it."""
+        self._mark(status="failed", error=error)
+
+    def mark_interrupted(self, signum: int, stage: str) -> None:
+        """``run.json`` says ``interrupted`` (a second signal stops the process at once)."""
+        from fenics_garment.interrupt import signal_name
+
+        self._mark(status="interrupted", signal=signal_name(signum), stage=stage)
+
+    def _mark(self, **detail: str) -> None:
+        try:
+            state = json.loads((self.path / STATE).read_text())
+            state.update(finished=time.strftime("%Y-%m-%dT%H:%M:%S%z"), **detail)
+            write_state(self.path / STATE, state)
+        except (OSError, ValueError, AttributeError):
+            pass
+
+
+#: Bytes of ``run.json``: its text padded with blanks (valid JSON), so that the final status
+#: can be written in place when the disk is full.
+STATE_BYTES = 4096
+
+
+def write_state(path: Path, state: dict) -> None:
+    """``run.json`` padded to :data:`STATE_BYTES`, written to a temporary name and renamed; on
+    a full disk (no room for the new file) overwritten in place, within the bytes it has."""
+    text = json.dumps(state, indent=1) + "\n"
+    try:
+        output.write_text(path, text.ljust(STATE_BYTES))
+    except OSError:
+        data = text.encode()
+        with open(path, "r+b") as f:
+            size = os.fstat(f.fileno()).st_size
+            if len(data) > size:
+                raise
+            f.write(data.ljust(size))
 
 
 def inside(root: Path, name: str) -> Path:

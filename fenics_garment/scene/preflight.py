@@ -61,8 +61,8 @@ def _collective(comm: MPI.Comm, message: str | None) -> None:
 def output_folder(folder: Path, comm: MPI.Comm) -> None:
     """Make ``folder`` (rank 0) and check that a file can be written in it and in its
     ``checkpoint/`` if there is one (a resumed run writes there first)."""
-    message = None
-    if comm.rank == 0:
+    message = _path_too_long(folder) if comm.rank == 0 else None
+    if comm.rank == 0 and message is None:
         try:
             folder.mkdir(parents=True, exist_ok=True)
             for where in (folder, folder / "checkpoint"):
@@ -76,6 +76,34 @@ def output_folder(folder: Path, comm: MPI.Comm) -> None:
                        f"{f' ({err.filename})' if err.filename else ''}; "
                        "choose another output root with -o/--output")  # fmt: skip
     _collective(comm, message)
+
+
+#: Longest path the run writes below its folder (``checkpoint/.state-123.r1023.part4194304.npz``
+#: and ADIOS2's files of ``.dressing.bp.part/``), with room to spare.
+LONGEST_INSIDE = 64
+
+
+def _path_too_long(folder: Path) -> str | None:
+    """Why the run's files cannot have their paths below ``folder``, or None: the system's
+    limits on a path (PATH_MAX) and on a name (NAME_MAX); ADIOS2 aborts the process on a path
+    it cannot open."""
+    from fenics_garment.bounded import cut
+
+    full = os.path.abspath(folder)
+    try:
+        path_max = os.pathconf("/", "PC_PATH_MAX")
+        name_max = os.pathconf("/", "PC_NAME_MAX")
+    except (OSError, ValueError):
+        path_max, name_max = 4096, 255
+    if len(os.fsencode(full)) + LONGEST_INSIDE >= path_max:
+        return (f"the output folder's path is {len(os.fsencode(full))} bytes long: the run's "
+                f"files need at most {path_max - LONGEST_INSIDE} (PATH_MAX {path_max}); "
+                f"choose a shorter output root with -o/--output ({cut(full)})")  # fmt: skip
+    long_part = next((p for p in Path(full).parts if len(os.fsencode(p)) > name_max), None)
+    if long_part is not None:
+        return (f"a folder name in the output path is longer than {name_max} bytes "
+                f"({cut(long_part)}); choose another output root with -o/--output")  # fmt: skip
+    return None
 
 
 def scene_limits(scene) -> None:

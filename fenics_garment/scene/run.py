@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fenics_garment import output
+from fenics_garment import interrupt, mpi_guard, output
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
@@ -133,9 +133,9 @@ class _Frames:
             self.packed = dolfinx.fem.Function(V4)
             self.expr = dolfinx.fem.Expression(_membrane_fields(model),
                                                V4.element.interpolation_points)  # fmt: skip
-            self.writer = dolfinx.io.VTXWriter(
-                mesh.comm, self.tmp, [self.disp, self.rot, self.p, *self.scalars], engine="BP4"
-            )
+            fields = [self.disp, self.rot, self.p, *self.scalars]
+            self._guarded(lambda: setattr(self, "writer", dolfinx.io.VTXWriter(
+                mesh.comm, self.tmp, fields, engine="BP4")))  # fmt: skip
         self.k = 0
 
     def write(self) -> None:
@@ -152,42 +152,34 @@ class _Frames:
         self._guarded(lambda: self.writer.write(float(self.k)))
         self.k += 1
 
-    def _guarded(self, work) -> None:
+    def _guarded(self, work: Callable[[], object]) -> None:
         """``work()`` on the ADIOS2 writer; a failure on any rank (a full disk: ADIOS2 raises a
-        RuntimeError) is an OutputError on every rank, with the partial series removed."""
+        C++ exception, a RuntimeError here) is an OutputError on every rank, decided together
+        (``output.agree``), with the partial series removed."""
         comm = self.built.model.geometry.mesh.comm
         message = None
         try:
             work()
-        except RuntimeError as err:
+        except Exception as err:  # whatever the C++ writer threw
             message = _adios_reason(str(err), self.tmp)
-        message = next((m for m in comm.allgather(message) if m), None)
+        message = output.agree(comm, message)
         if message is None:
             return
-        # The writer's destructor flushes again; on a disk still full it would fail again and
-        # abort the process. So its files are emptied (which frees their space although
-        # ADIOS2 keeps them open), it is closed, and the partial series removed; a writer that
-        # cannot even close then is kept alive (with its emptied folder) until the process ends.
         self.discard(comm)
         raise output.OutputError(message)
 
     def discard(self, comm: MPI.Comm) -> None:
-        """Remove the partial series after another file failed (collective): its files are
-        emptied first (the disk may be full), the writer closed, the folder removed; a writer
-        that cannot close is kept alive with its folder, as in :meth:`_guarded`."""
+        """Remove the partial series (after a failure of this or another file, or an
+        interruption). The writer is not closed: on a full disk its close, and then its
+        destructor, would write again, and a C++ exception in a destructor aborts the process
+        (and a collective close can leave one rank waiting for another that gave up). It is
+        left alive until the process ends (:func:`_abandon`); its files are emptied and
+        removed."""
         writer, self.writer = self.writer, None
-        if writer is None:
-            return
+        if writer is not None:
+            _abandon(writer)
         if comm.rank == 0:
-            _empty(self.tmp)
-        comm.Barrier()
-        try:
-            writer.close()
-            closed = True
-        except RuntimeError:
-            _ABANDONED.append(writer)
-            closed = False
-        if comm.allreduce(closed, op=MPI.LAND) and comm.rank == 0:
+            _empty(self.tmp)  # frees the space at once: the writer keeps its files open
             shutil.rmtree(self.tmp, ignore_errors=True)
 
     def close(self, comm: MPI.Comm) -> None:
@@ -195,12 +187,11 @@ class _Frames:
             return
         self._guarded(self.writer.close)
         comm.Barrier()
-        if comm.rank == 0:
-            output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp))
+        output.guarded(comm, lambda: output.atomic_dir(self.path, lambda tmp: self.tmp.rename(tmp)))
         comm.Barrier()
 
 
-#: VTX writers that failed (kept alive: see ``_Frames._guarded``).
+#: VTX writers that failed (kept alive: see ``_Frames.discard``).
 _ABANDONED: list = []
 
 
@@ -210,6 +201,15 @@ def _empty(folder: Path) -> None:
             os.truncate(f, 0)
         except OSError:
             pass
+
+
+def _abandon(writer: object) -> None:
+    """Keep ``writer`` alive until the process ends, its destructor never run: one more
+    reference than any owner will release (the list alone is emptied at interpreter exit)."""
+    import ctypes
+
+    _ABANDONED.append(writer)
+    ctypes.pythonapi.Py_IncRef(ctypes.py_object(writer))
 
 
 def _adios_reason(text: str, path: Path) -> str:
@@ -360,6 +360,8 @@ def run(
     preflight.output_folder(folder, comm)
     state = run_folder.RunFolder(folder, comm)
     state.acquire()
+    mpi_guard.ON_ABORT.append(state.mark_failed)
+    interrupt.ON_STOP.append(state.mark_interrupted)
     try:
         state.start(fresh=meta is None, clear=clear)
         line = ProgressLine(enabled=comm.rank == 0 and not quiet)
@@ -367,13 +369,22 @@ def run(
             result = _run_in(state, scene, recorded, meta, first_step=first_step,
                              checkpoints=checkpoints, terms=terms)  # fmt: skip
     except output.OutputError as err:
-        state.finish("failed", collective=False)
+        state.finish("failed", collective=False, error=str(err), stage=interrupt.stage())
         err.folder = err.folder or folder
+        err.checkpoint = checkpoint.exists(err.folder)
+        raise
+    except interrupt.Interrupted as err:
+        err.folder = err.folder or folder
+        err.checkpoint = checkpoint.exists(folder)
+        state.finish("interrupted", collective=False, signal=interrupt.signal_name(err.signum),
+                     stage=err.stage)  # fmt: skip
         raise
     except BaseException:
         state.finish("failed", collective=False)
         raise
     finally:
+        mpi_guard.ON_ABORT.remove(state.mark_failed)
+        interrupt.ON_STOP.remove(state.mark_interrupted)
         state.release()
     return result
 
@@ -413,8 +424,16 @@ def _run_in(
     text = config.dumps(recorded)
     output.guarded(comm, lambda: output.write_text(folder / "scene_used.toml", text))
     times: dict[str, float] = {}
-    built = build_stage(scene, comm, say, times, check=meta is None)
     hooks = [h for h in (config.load_terms(scene.physics.terms, scene.source), terms) if h]
+    depends = checkpoint.depends(scene, hooks)
+    if meta is not None:
+        checkpoint.check_depends(meta, depends, folder, later=("meshes",))
+    interrupt.set_stage("while building the scene")
+    built = build_stage(scene, comm, say, times, check=meta is None)
+    depends["meshes"] = checkpoint.mesh_digest(built)
+    if meta is not None:
+        checkpoint.check_depends(meta, depends, folder)
+    interrupt.poll(comm)
 
     def edit(b: scene_build.Built) -> None:
         for hook in hooks:
@@ -427,11 +446,13 @@ def _run_in(
         start, levels = sequence_stage(built, say, times, edit, first_step=first_step)
         first_step = None if start is not None else first_step
     solved = solve_stage(built, folder, recorded, meta, say, times, first_step=first_step,
-                         checkpoints=checkpoints, start=start)  # fmt: skip
+                         checkpoints=checkpoints, start=start, depends=depends)  # fmt: skip
     if start is None and levels:  # a coarser level did not dress: this mesh was dressed directly
         solved.report.levels = levels
         solved.report.sequence_failed = levels[-1]["message"]
     current_line().stage("writing the outputs")
+    interrupt.set_stage("while writing the outputs (the dressing is complete)")
+    interrupt.poll(comm)
     result = write_stage(built, solved, tight, times, t_start)
     result.summary["run_id"] = state.run_id
     _write_outputs(folder, built, result)
@@ -500,20 +521,24 @@ def solve_stage(
     first_step: float | None = None,
     checkpoints: bool = True,
     start: Progress | None = None,
+    depends: dict[str, str] | None = None,
 ) -> Solved:
     """Stage 2: compile the residual of the problem as it is now and dress (VTX frames and
     checkpoints on the way; ``meta``: the checkpoint to resume from; ``start``: where a fresh
-    dressing starts, the state already in the model: :func:`sequence_stage`)."""
+    dressing starts, the state already in the model: :func:`sequence_stage`; ``depends``: what
+    the checkpoints record besides the scene, :func:`.checkpoint.depends`)."""
     scene, comm = built.scene, built.model.geometry.mesh.comm
     t0 = time.perf_counter()
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     current_line().stage("JIT: compiling the forms")
+    interrupt.set_stage("while compiling the forms")
     solver = scene_solver(built)
     solver.progress = _slow_iterations(say)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
     if times["jit"] >= SLOW_ITERATION_S:  # the JIT, or the Jacobian's sparsity of a large mesh
         say(f"  forms compiled and the Jacobian allocated ({times['jit']:.0f} s)")
+    interrupt.poll(comm)
     t0 = time.perf_counter()
     progress = start
     if meta is not None:
@@ -521,7 +546,8 @@ def solve_stage(
         frames.k = len(progress.report.steps)
         say(f"  resuming from checkpoint {meta['checkpoint']} ({progress.stage}, shrink "
             f"{progress.shrink * 1e3:.2f} mm, {frames.k} solves done)")  # fmt: skip
-    ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0)
+    ckpt = checkpoint.Writer(folder, recorded, comm, meta["checkpoint"] if meta else 0,
+                             depends)  # fmt: skip
     kappa0 = float(built.contact.kappa.value)
     try:
         report, completed, message = _dress(built, solver, frames, ckpt if checkpoints else None,
@@ -541,6 +567,9 @@ def solve_stage(
             report.levels, report.sequence_failed = levels, why
     except output.OutputError:
         frames.discard(comm)  # e.g. a checkpoint hit a full disk: no partial series left
+        raise
+    except interrupt.Interrupted:  # (raised by a poll: on every rank at once)
+        frames.discard(comm)
         raise
     times["dressing"] = time.perf_counter() - t0 - ckpt.seconds
     times["checkpoint"] = ckpt.seconds
@@ -707,7 +736,12 @@ def _dress(
     h = built.model.stiffness.thickness  # the tolerance is a fraction of it
     al = (p.tolerance * h, p.max_updates) if p.contact == "augmented-lagrangian" else None
 
+    comm = built.model.geometry.mesh.comm
+    solves = 0
+
     def on_step(rec: DressStep) -> None:
+        nonlocal solves
+        solves += 1
         if frames is not None:  # (None: a coarser level of a mesh sequence)
             frames.write()
         cut = f"  (after {rec.cuts} cut{'s' * (rec.cuts > 1)})" if rec.cuts else ""
@@ -717,18 +751,26 @@ def _dress(
         say(f"  {what}   Newton its {rec.iterations:2d}   {rec.seconds:5.1f} s{cut}")
         kind = {"dress": "shrink", "sew": "sewing"}.get(rec.stage, "spring release")
         current_line().step(kind, spring=rec.regularisation)
+        level = "" if frames is not None else " of a coarser mesh level"
+        interrupt.set_stage(f"while dressing{level} (after solve {solves}: "
+                            f"{' '.join(what.split())})")  # fmt: skip
 
     def on_failure(target: float, its: int, reason: int, what: str = "shrink") -> None:
         to = f"{target * 1e3:6.2f} mm" if what == "shrink" else f"{target:.3f}"
         say(f"  {what} → {to} failed (SNES reason {reason}, {its} its): halving the step")
+        interrupt.poll(comm)
 
-    write_ckpt = (lambda pr: ckpt.write(built, pr)) if ckpt is not None else None
+    def on_checkpoint(pr: Progress) -> None:
+        if ckpt is not None:
+            ckpt.write(built, pr)
+        interrupt.poll(comm)  # after the checkpoint: a resume loses no solve
+
     _dressing_stage(built, progress_from=progress)
     try:
         report = dress(built, solver, steps=d.steps, margin=d.margin, max_cuts=d.max_cuts,
                        grow=d.grow, first_step=first_step, on_step=on_step,
                        on_failure=on_failure, augmented_lagrangian=al,
-                       on_checkpoint=write_ckpt, resume=progress, schedule=d.schedule,
+                       on_checkpoint=on_checkpoint, resume=progress, schedule=d.schedule,
                        friction_while_growing=d.friction_while_growing,
                        release_ratio=d.release_ratio, predictor=d.predictor,
                        path_tolerance=d.path_tolerance,
