@@ -9,10 +9,12 @@
   ankles), near the crown one (the head): the end with more *outer* outlines (not nested inside
   another, larger than 5 % of the biggest one, so eye sockets, ears or nostrils do not count)
   is down. Ties (legs together, a torso only) keep the positive direction; give ``up``.
-* **Units.** A full standing body is 1.0–2.3 m tall; in mm, cm, dm, m and inches these ranges
-  do not overlap, so the height along the up axis names the unit. A part of a body (a torso
-  only) falls outside all of them and is read as mm / cm / m by size, as before; give ``units``
-  or ``scale`` for anything else.
+* **Units.** A full standing body is 1.0–2.5 m tall; in mm, cm, dm, m and inches these ranges
+  do not overlap (inches and centimetres stay apart up to 2.54 × the lower bound), so the
+  height along the up axis names the unit. MakeHuman's tallest body is 2.45 m
+  (:mod:`.population`): with 2.3 m as the upper bound it was read in inches as 0.97 m. A part
+  of a body (a torso only) falls outside all of them and is read as mm / cm / m by size, as
+  before; give ``units`` or ``scale`` for anything else.
 """
 
 from __future__ import annotations
@@ -29,8 +31,9 @@ IArray = npt.NDArray[np.int64]
 
 #: metres per unit
 UNITS: dict[str, float] = {"mm": 0.001, "cm": 0.01, "dm": 0.1, "m": 1.0, "in": 0.0254}
-#: a full standing adult or child from 1.0 to 2.3 m tall
-STATURE_RANGE = (1.0, 2.3)
+#: a full standing adult or child from 1.0 to 2.5 m tall (upper < 2.54 × lower: the ranges
+#: in inches and centimetres must not meet)
+STATURE_RANGE = (1.0, 2.5)
 
 # proper rotations taking the named up axis to +z (for "y": (x, y, z) -> (x, -z, y), so a Y-up
 # model facing +z, the usual OBJ/glTF convention, ends facing -y as the package expects)
