@@ -10,7 +10,7 @@ ranks. Per run: exit code, every result check, wall time, solves, cuts, final pe
 dofs, the one-line error and its stage (import, anatomy, meshing, dressing, checks). Runs in
 the record are skipped (an interrupted sweep continues); ``--retry`` runs the failed ones again.
 
-    python -m benchmarks.bodies export                 (write the body files, print the table)
+    python -m benchmarks.bodies export [--reimport]    (write the body files, check their import)
     python -m benchmarks.bodies sweep [body ...] [--garments gilet,dress,...] [--retry]
     python -m benchmarks.bodies table                  (the stored record as Markdown)
     python -m benchmarks.bodies vendor WHEEL           (rebuild meshes/makehuman/targets/
@@ -222,15 +222,17 @@ def _store(key: str, value) -> None:
     RESULTS.write_text(json.dumps(data, indent=1, default=float))
 
 
-def population_record(paths: dict[str, Path]) -> list[dict]:
+def population_record(paths: dict[str, Path], reimport: bool = False) -> list[dict]:
     """The bodies as written: sliders, format, units, up axis, file size, and the import check
-    (kept from the record for a body whose sliders and export are unchanged)."""
+    (kept from the record for a body whose sliders and export are unchanged, unless
+    ``reimport``)."""
     old = {b["name"]: b for b in _load().get("bodies", [])}
     out = []
     for b in pop.population():
         d = b.as_dict()
         prev = old.get(b.name, {})
-        if {k: prev.get(k) for k in d} == json.loads(json.dumps(d)) and "import" in prev:
+        same = {k: prev.get(k) for k in d} == json.loads(json.dumps(d))
+        if same and "import" in prev and not reimport:
             d["import"] = prev["import"]
         else:
             d["import"] = import_check(b, paths[b.name])
@@ -364,7 +366,7 @@ def markdown(data: dict | None = None) -> str:
 
 def main(argv: list[str]) -> int:
     names = [b.name for b in pop.population()]
-    bad = check_args(argv, __doc__, {"--retry"}, {"--garments"},
+    bad = check_args(argv, __doc__, {"--retry", "--reimport"}, {"--garments"},
                      lambda a: a in {"export", "sweep", "table", "vendor", *names}
                      or a.endswith(".whl") or set(a.split(",")) <= set(GARMENTS))  # fmt: skip
     if bad is not None:
@@ -379,7 +381,7 @@ def main(argv: list[str]) -> int:
     if argv[0] == "export":
         paths = files()
         say(f"{len(paths)} bodies in {CACHE / 'files'}")
-        population_record(paths)
+        population_record(paths, "--reimport" in argv)
         return 0
     garments = (argv[argv.index("--garments") + 1].split(",") if "--garments" in argv
                 else list(GARMENTS))  # fmt: skip
