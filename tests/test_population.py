@@ -141,3 +141,24 @@ def test_load_scan_finds_the_anatomy_of_an_extreme_body(tmp_path):
     assert set(report["limbs"]) == {"arm_left", "arm_right", "leg_left", "leg_right"}
     L = report["landmarks"]
     assert L["crotch"] < L["waist"] < L["bust"] < L["armpit"] < L["shoulder"]
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ["m-heavy"])
+def test_population_body_dressed_end_to_end(name, tmp_path):
+    """The scan gilet (``demos/scan_gilet.toml``, its body file replaced) dresses on a body of
+    the population read from its export, as ``benchmarks/bodies.py`` runs it: dressed, the
+    spring released, every result check passed (exit 0)."""
+    from dataclasses import replace
+
+    from fenics_garment.scene import config
+    from fenics_garment.scene.run import EXIT_DONE, exit_code, run
+
+    path = pop.export(pop.by_name(name), tmp_path / "body")
+    scene = config.load(pop.MAKEHUMAN.parents[1] / "demos" / "scan_gilet.toml")
+    scene = replace(scene, body=replace(scene.body, file=str(path)),
+                    output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
+    result = run(scene, tmp_path / "out", quiet=True)
+    failed = {c.name: c.value for c in result.checks if not c.ok}
+    assert exit_code(result) == EXIT_DONE, (result.message, failed)
+    assert result.report.final_regularisation == 0.0
