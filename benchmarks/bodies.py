@@ -105,11 +105,19 @@ def import_check(b: pop.Body, path: Path) -> dict:
     height = 0.1 * float(np.ptp(v[body, 1]))
     t0 = time.perf_counter()
     try:
-        _, rep = load_scan(path)
+        scan, rep = load_scan(path)
     except Exception as e:  # a ScanError is the finding; anything else too
         return {"status": "failed", "error": f"{type(e).__name__}: {' '.join(str(e).split())}",
                 "height_m": height, "import_s": time.perf_counter() - t0}  # fmt: skip
+    from scipy.spatial import cKDTree
+
+    # the body as read against the package's frame (Z up, facing −y, its left at +x): the
+    # largest distance of a vertex read to the nearest written, bounding boxes' corners matched
+    ref = pop.to_package_frame(v)[body]
+    got = scan.vertices + (ref.min(axis=0) - scan.vertices.min(axis=0))
+    frame = float(cKDTree(ref).query(got)[0].max())
     return {"status": "ok", "units": rep["units"], "up": rep["up"], "height_m": height,
+            "frame_error_m": frame, "frame_ok": frame < 1e-3,
             "height_read_m": rep["height"], "import_s": time.perf_counter() - t0,
             "units_ok": rep["units"] == b.units, "up_ok": rep["up"] == b.up,
             "height_error_m": rep["height"] - height,
@@ -242,7 +250,8 @@ def population_record(paths: dict[str, Path], reimport: bool = False) -> list[di
         i = d["import"]
         print(f"  {b.name:26} {b.fmt:9} {b.units:3} {b.up:3} "
               + (f"read {i['units']:3} {i['up']:3} height {i['height_m']:.3f} m "
-                 f"(read {i['height_read_m']:.3f})" if i["status"] == "ok"
+                 f"(read {i['height_read_m']:.3f}) frame error {i['frame_error_m']:.2g} m"
+                 if i["status"] == "ok"
                  else f"IMPORT FAILED {i['error']}"), flush=True)  # fmt: skip
     _store("bodies", out)
     return out
@@ -303,13 +312,16 @@ def markdown(data: dict | None = None) -> str:
     for b in bodies:
         m, i = b["macro"], b["import"]
         ok = i["status"] == "ok"
+        turned = f", turned {b['turn']}°" if b.get("turn") else ""
         read = (f"{i['units']}{'' if i['units_ok'] else ' ✗'} | {i['up']}"
-                f"{'' if i['up_ok'] else ' ✗'} | {i['import_s']:.0f}") if ok else (
+                f"{'' if i['up_ok'] else ' ✗'}"
+                f"{'' if i.get('frame_ok', True) else ' (facing ✗)'} | "
+                f"{i['import_s']:.0f}") if ok else (
                 f"failed: {i['error'][:90]} | | {i['import_s']:.0f}")  # fmt: skip
         out.append(f"| {b['name']} | {m['gender']:.2f} | {b['age_years']:.0f} | "
                    f"{m['muscle']:.2f} | {m['weight']:.2f} | {m['height']:.2f} | "
                    f"{m['proportions']:.2f} | {m['cup']:.2f} | {i['height_m']:.3f} | "
-                   f"{b['fmt']} {b['units']} {b['up']}-up | {read} |")  # fmt: skip
+                   f"{b['fmt']} {b['units']} {b['up']}-up{turned} | {read} |")  # fmt: skip
     out += ["", "| garment | runs | exit 0 | failed (stage: count) | wall min / median / max [s]"
             " | dofs | solves | cuts | max penetration / h |", "|---" * 9 + "|"]  # fmt: skip
     for g in GARMENTS:

@@ -193,6 +193,9 @@ class Body:
     fmt: str = "stl"
     units: str = "mm"
     up: str = "z"
+    #: the body turned about its vertical by this many degrees (counter-clockwise seen from
+    #: above) before the up axis is laid: 0 faces −y with Z up and +z with Y up; 90 faces +x
+    turn: int = 0
 
     @property
     def file_name(self) -> str:
@@ -239,13 +242,18 @@ def _designs() -> list[tuple[str, Macro]]:
 
 
 def population() -> list[Body]:
-    """The bodies (37), each with an export format, units and up axis: the formats cycle
-    fastest, then the units, and the up axis steps once per body against them, so that every
-    format meets every unit and every format several up axes."""
+    """The bodies (37 shapes, 39 files), each with an export format, units and up axis: the
+    formats cycle fastest, then the units, and the up axis steps once per body against them,
+    so that every format meets every unit and every format several up axes."""
     ups = ("y", "z", "-z", "x", "-y", "-x")
     units = ("mm", "cm", "m", "in")
-    return [Body(name, m, FORMATS[k % 6], units[(k // 6) % 4], ups[(k + k // 6) % 6])
-            for k, (name, m) in enumerate(_designs())]  # fmt: skip
+    out = [Body(name, m, FORMATS[k % 6], units[(k // 6) % 4], ups[(k + k // 6) % 6])
+           for k, (name, m) in enumerate(_designs())]  # fmt: skip
+    # a scanner's subject need not face the way the package expects (−y with Z up): the same
+    # woman and man turned a quarter and a half turn (distinct files, not distinct shapes)
+    f, m = Macro(gender=0.0), Macro(gender=1.0)
+    return [*out, Body("female-turned-180", f, "stl", "mm", "z", 180),
+            Body("male-turned-90", m, "ply", "m", "z", 90)]  # fmt: skip
 
 
 def by_name(name: str) -> Body:
@@ -266,7 +274,9 @@ def export(body: Body, folder: str | Path, *, fmt: str | None = None, units: str
     import trimesh
 
     fmt, units, up = fmt or body.fmt, units or body.units, up or body.up
-    v = to_package_frame(body_vertices(body.macro)) @ ROTATIONS[up] / UNITS[units]
+    c, s = np.cos(np.radians(body.turn)), np.sin(np.radians(body.turn))
+    turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    v = to_package_frame(body_vertices(body.macro)) @ turn.T @ ROTATIONS[up] / UNITS[units]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stem = f"{body.name}-{fmt}-{units}-{up.replace('-', 'neg')}" if (fmt, units, up) != (
