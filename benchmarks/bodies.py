@@ -215,7 +215,11 @@ def _from_summary(sm: dict) -> dict:
             "final_regularisation": d.get("final_regularisation_Pa_per_m"),
             "max_pressure_kPa": sm.get("max_pressure_kPa"),
             "contact_force_N": sm.get("contact_force_N"),
-            "time_s": sm.get("time_s"), "ranks": sm.get("ranks")}  # fmt: skip
+            "time_s": sm.get("time_s"), "ranks": sm.get("ranks"),
+            # where the garment touches (issue 40, item 3: torso garments clear of the arms)
+            "contact_cm2": {r["region"]: round(1e4 * r["contact_area_m2"], 1)
+                            for r in sm.get("regions", [])
+                            if r.get("contact_area_m2")}}  # fmt: skip
 
 
 # -- the sweep --------------------------------------------------------------------------------
