@@ -115,20 +115,27 @@ def test_population_is_distinct_and_spans_the_sliders(measured):
 
 
 # every format, unit and up axis at least once; the tallest body in inches (read as
-# centimetres, a 0.97 m body, before the stature range reached 2.5 m) and the shortest in metres
-ROUND_TRIP = [("female", "stl", "mm", "y"), ("female", "stl-ascii", "cm", "z"),
-              ("female", "ply", "m", "-z"), ("female", "ply-ascii", "in", "x"),
-              ("female", "obj", "mm", "-y"), ("female", "glb", "cm", "-x"),
-              ("m-tall", "stl", "in", "-y"), ("f-short-thin-teen", "ply", "m", "z")]  # fmt: skip
+# centimetres, a 0.97 m body, before the stature range reached 2.5 m), the shortest in metres;
+# bodies facing +y, +x and −x (before the facing was detected: read back to front, or refused
+# with "the right arm does not leave the torso")
+ROUND_TRIP = [("female", "stl", "mm", "y", 0), ("female", "stl-ascii", "cm", "z", 0),
+              ("female", "ply", "m", "-z", 0), ("female", "ply-ascii", "in", "x", 0),
+              ("female", "obj", "mm", "-y", 0), ("female", "glb", "cm", "-x", 0),
+              ("m-tall", "stl", "in", "-y", 0), ("f-short-thin-teen", "ply", "m", "z", 0),
+              ("female", "stl", "mm", "z", 180), ("male", "ply", "m", "z", 90),
+              ("f-maxcup-soft-heavy", "obj", "cm", "y", 270)]  # fmt: skip
 
 
-@pytest.mark.parametrize(("name", "fmt", "units", "up"), ROUND_TRIP)
-def test_export_round_trips_through_the_import(name, fmt, units, up, tmp_path):
-    body = pop.by_name(name)
+@pytest.mark.parametrize(("name", "fmt", "units", "up", "turn"), ROUND_TRIP)
+def test_export_round_trips_through_the_import(name, fmt, units, up, turn, tmp_path):
+    from dataclasses import replace
+
+    body = replace(pop.by_name(name), turn=turn)
     path = pop.export(body, tmp_path, fmt=fmt, units=units, up=up)
     v, t = read_polygons(path)
     got, _, report = clean_surface(v, t)
     assert (report["units"], report["up"]) == (units, up)
+    assert report["turned"] == (360 - turn) % 360  # turned back to face −y
     ref = pop.to_package_frame(pop.body_vertices(body.macro))[np.unique(pop.base_mesh().faces())]
     got = got + (ref.min(axis=0) - got.min(axis=0))
     assert cKDTree(ref).query(got)[0].max() < 1e-4  # 0.1 mm: float32 and ascii digits
