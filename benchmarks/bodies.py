@@ -141,9 +141,10 @@ def scene_file(body_path: Path, garment: str, folder: Path) -> Path:
 STAGES = (  # (stage, pattern of the one-line error): the first that matches
     ("import/units/up-axis", r"not a human body|units|up axis|not a readable mesh|not closed"),
     ("anatomy/landmarks", r"landmark|armpit|crotch|limb|arm root|torso|anatomy|shoulder|leg"),
+    ("garment construction", r"starts [0-9.]+ mm inside the body|ease"),
     ("meshing", r"gmsh|mesh|loft|pattern|cell"),
-    ("penetration tolerance", r"augmented Lagrangian: penetration"),
 )
+PENETRATION = r"augmented Lagrangian: penetration"
 
 
 def classify(r: dict) -> str:
@@ -156,11 +157,10 @@ def classify(r: dict) -> str:
     if code == 4:
         return "check failure"
     if code == 3:
-        return ("penetration tolerance" if re.search(STAGES[3][1], msg)
-                else "dressing stall")  # fmt: skip
+        return "penetration tolerance" if re.search(PENETRATION, msg) else "dressing stall"
     if code == 1:
         return "internal error"
-    for stage, pattern in STAGES[:3]:
+    for stage, pattern in STAGES:
         if re.search(pattern, msg, re.IGNORECASE):
             return stage
     return "refused"

@@ -116,6 +116,8 @@ def test_bodies_sweep_classifies_a_failure_by_its_stage():
              ({"exit_code": 2, "error": "b.stl: the scan is 3.1 m across in 'mm': not a human "
                "body"}, "import/units/up-axis"),
              ({"exit_code": 2, "error": "b.stl: no armpit found"}, "anatomy/landmarks"),
+             ({"exit_code": 2, "error": "s.toml: the garment starts 69.1 mm inside the body; "
+               "with dressing.margin 2 mm …"}, "garment construction"),
              ({"exit_code": 1, "error": "internal error: ValueError"}, "internal error"),
              ({"exit_code": -15, "timed_out": True}, "time limit")]  # fmt: skip
     for rec, stage in cases:
