@@ -271,7 +271,7 @@ def sweep(names: list[str], garments: list[str], retry: bool, say) -> list[dict]
         for name in names:
             runs = _load().get("runs", [])
             done = [r for r in runs if (r["body"], r["garment"]) == (name, g)]
-            if done and not (retry and done[-1]["stage"] != "ok"):
+            if done and not (retry and classify(done[-1]) != "ok"):
                 continue
             if name not in ok_import:  # run all the same: the CLI's message is the record
                 say(f"  {name} × {g}: the body did not import on its own")
@@ -301,7 +301,8 @@ def _stats(xs: list[float]) -> str:
 def markdown(data: dict | None = None) -> str:
     """The "bodies" section of REPORT.md: the population, the runs by garment, the failures."""
     data = _load() if data is None else data
-    bodies, runs = data.get("bodies", []), data.get("runs", [])
+    bodies = data.get("bodies", [])
+    runs = [r | {"stage": classify(r)} for r in data.get("runs", [])]  # by today's stages
     fmts = sorted({b["fmt"] for b in bodies})
     out = [f"A population of {len(bodies)} MakeHuman bodies (CC0 macro targets, "
            "`fenics_garment.geometry.population`) exported as scanners and body tools would "
