@@ -155,7 +155,7 @@ def test_load_scan_finds_the_anatomy_of_an_extreme_body(tmp_path):
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("name", ["m-heavy"])
+@pytest.mark.parametrize("name", ["female"])
 def test_population_body_dressed_end_to_end(name, tmp_path):
     """The scan gilet (``demos/scan_gilet.toml``, its body file replaced) dresses on a body of
     the population read from its export, as ``benchmarks/bodies.py`` runs it: dressed, the
