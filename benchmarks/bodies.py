@@ -107,7 +107,8 @@ def import_check(b: pop.Body, path: Path) -> dict:
     try:
         scan, rep = load_scan(path)
     except Exception as e:  # a ScanError is the finding; anything else too
-        return {"status": "failed", "error": f"{type(e).__name__}: {' '.join(str(e).split())}",
+        return {"status": "failed", "code": _import_code(),
+                "error": _local(f"{type(e).__name__}: {' '.join(str(e).split())}"),
                 "height_m": height, "import_s": time.perf_counter() - t0}  # fmt: skip
     from scipy.spatial import cKDTree
 
@@ -116,13 +117,30 @@ def import_check(b: pop.Body, path: Path) -> dict:
     ref = pop.to_package_frame(v)[body]
     got = scan.vertices + (ref.min(axis=0) - scan.vertices.min(axis=0))
     frame = float(cKDTree(ref).query(got)[0].max())
-    return {"status": "ok", "units": rep["units"], "up": rep["up"], "height_m": height,
+    return {"status": "ok", "code": _import_code(), "units": rep["units"], "up": rep["up"],
+            "height_m": height, "turned": rep.get("turned"),
             "frame_error_m": frame, "frame_ok": frame < 1e-3,
             "height_read_m": rep["height"], "import_s": time.perf_counter() - t0,
             "units_ok": rep["units"] == b.units, "up_ok": rep["up"] == b.up,
             "height_error_m": rep["height"] - height,
             "landmarks": rep["landmarks"], "girths": rep["girths"],
             "limbs": sorted(rep["limbs"])}  # fmt: skip
+
+
+def _import_code() -> str:
+    """A fingerprint of the scan import's code (read, clean, orient, anatomy): an import check
+    made by other code is made again."""
+    import hashlib
+
+    geo = Path(pop.__file__).parent
+    names = ("scan.py", "scan_read.py", "orientation.py", "anatomy.py", "limbs.py", "surface.py")
+    src = b"".join((geo / f).read_bytes() for f in names)
+    return hashlib.sha256(src).hexdigest()[:12]
+
+
+def _local(text: str) -> str:
+    """``text`` without this machine's cache folder (messages name the files)."""
+    return text.replace(str(CACHE), "<cache>")
 
 
 # -- one run ----------------------------------------------------------------------------------
@@ -190,10 +208,10 @@ def run_one(body: str, garment: str, path: Path, folder: Path = CACHE,
     text = log.read_text(errors="replace")
     errors = [ln.strip() for ln in text.splitlines() if ln.lstrip().startswith("error:")]
     rec = {"body": body, "garment": garment, "exit_code": code, "timed_out": timed_out,
-           "wall_s": wall, "error": errors[-1][len("error:"):].strip() if errors else "",
+           "wall_s": wall, "error": _local(errors[-1][len("error:"):].strip()) if errors else "",
            "loadavg": os.getloadavg()}  # fmt: skip
     if timed_out:
-        rec["error"] = f"stopped after {TIMEOUT:.0f} s; last line: {text.strip()[-200:]!r}"
+        rec["error"] = _local(f"stopped after {TIMEOUT:.0f} s; last: {text.strip()[-200:]!r}")
     summaries = list(out.glob("*/summary.json"))
     if summaries:
         rec.update(_from_summary(json.loads(summaries[0].read_text())))
@@ -244,7 +262,8 @@ def population_record(paths: dict[str, Path], reimport: bool = False) -> list[di
         d = b.as_dict()
         prev = old.get(b.name, {})
         same = {k: prev.get(k) for k in d} == json.loads(json.dumps(d))
-        if same and "import" in prev and not reimport:
+        same = same and prev.get("import", {}).get("code") == _import_code()
+        if same and not reimport:
             d["import"] = prev["import"]
         else:
             d["import"] = import_check(b, paths[b.name])
@@ -302,7 +321,10 @@ def markdown(data: dict | None = None) -> str:
     """The "bodies" section of REPORT.md: the population, the runs by garment, the failures."""
     data = _load() if data is None else data
     bodies = data.get("bodies", [])
-    runs = [r | {"stage": classify(r)} for r in data.get("runs", [])]  # by today's stages
+    runs = [
+        r | {"stage": classify(r), "error": _local(r.get("error", ""))}
+        for r in data.get("runs", [])
+    ]  # stages as classified today
     fmts = sorted({b["fmt"] for b in bodies})
     out = [f"A population of {len(bodies)} MakeHuman bodies (CC0 macro targets, "
            "`fenics_garment.geometry.population`) exported as scanners and body tools would "
@@ -322,7 +344,7 @@ def markdown(data: dict | None = None) -> str:
                 f"{'' if i['up_ok'] else ' ✗'}"
                 f"{'' if i.get('frame_ok', True) else ' (facing ✗)'} | "
                 f"{i['import_s']:.0f}") if ok else (
-                f"failed: {i['error'][:90]} | | {i['import_s']:.0f}")  # fmt: skip
+                f"failed: {_local(i['error'])[:120]} | | {i['import_s']:.0f}")  # fmt: skip
         out.append(f"| {b['name']} | {m['gender']:.2f} | {b['age_years']:.0f} | "
                    f"{m['muscle']:.2f} | {m['weight']:.2f} | {m['height']:.2f} | "
                    f"{m['proportions']:.2f} | {m['cup']:.2f} | {i['height_m']:.3f} | "
