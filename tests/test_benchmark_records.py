@@ -132,4 +132,4 @@ def test_bodies_sweep_classifies_a_failure_by_its_stage():
                        "up_ok": True, "import_s": 8.0, "height_m": 1.59}}  # fmt: skip
     md = bodies.markdown({"bodies": [body], "runs": [run]})
     assert "| f-heavy | dress | 3 | penetration tolerance | 738 | augmented Lagrangian" in md
-    assert "| dress | 1 | 0 | penetration tolerance: 1 |" in md
+    assert "| dress | 1 | 0 | penetration tolerance: 1 | 738 / 738 / 738 | 1 | 51504–51504 |" in md
