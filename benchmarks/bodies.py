@@ -249,7 +249,7 @@ def _store(key: str, value) -> None:
     data = _load()
     data[key] = value
     RESULTS.parent.mkdir(exist_ok=True)
-    RESULTS.write_text(json.dumps(data, indent=1, default=float))
+    RESULTS.write_text(_local(json.dumps(data, indent=1, default=float)))
 
 
 def population_record(paths: dict[str, Path], reimport: bool = False) -> list[dict]:
