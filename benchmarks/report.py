@@ -163,6 +163,11 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
             parts += [validation_markdown(d), ""]
             continue
+        if name == "bodies":  # a population of bodies dressed (benchmarks/bodies.py)
+            from benchmarks.bodies import markdown as bodies_markdown
+
+            parts += [bodies_markdown(d), ""]
+            continue
         if name == "mesh_noise":  # one scene on meshes of the same size (benchmarks/mesh_noise.py)
             from benchmarks.mesh_noise import markdown as noise_markdown
 

@@ -102,3 +102,34 @@ def test_the_parallel_ceiling_is_amdahls_law():
     assert ceiling(0.0, 1.0) == pytest.approx(2.0)
     assert ceiling(1.0, 1.3) == pytest.approx(1.3)
     assert ceiling(0.5, 1.0) == pytest.approx(4.0 / 3.0)
+
+
+def test_bodies_sweep_classifies_a_failure_by_its_stage():
+    """benchmarks/bodies.py: a run's exit code and one-line message name the stage it failed
+    in, and the REPORT.md section lists it with its message."""
+    from benchmarks import bodies
+
+    pen = "augmented Lagrangian: penetration 5.41e-06 m not below 4.6e-06 m after 3 updates"
+    cases = [({"exit_code": 0}, "ok"), ({"exit_code": 4}, "check failure"),
+             ({"exit_code": 3, "error": pen}, "penetration tolerance"),
+             ({"exit_code": 3, "error": "dressing stopped: step 0.1 mm"}, "dressing stall"),
+             ({"exit_code": 2, "error": "b.stl: the scan is 3.1 m across in 'mm': not a human "
+               "body"}, "import/units/up-axis"),
+             ({"exit_code": 2, "error": "b.stl: no armpit found"}, "anatomy/landmarks"),
+             ({"exit_code": 2, "error": "s.toml: the garment starts 69.1 mm inside the body; "
+               "with dressing.margin 2 mm …"}, "garment construction"),
+             ({"exit_code": 1, "error": "internal error: ValueError"}, "internal error"),
+             ({"exit_code": -15, "timed_out": True}, "time limit")]  # fmt: skip
+    for rec, stage in cases:
+        assert bodies.classify(rec) == stage, rec
+    run = {"body": "f-heavy", "garment": "dress", "exit_code": 3, "wall_s": 738.0,
+           "error": pen, "stage": "penetration tolerance", "dofs": 51504, "solves": 24,
+           "cuts": 25, "max_penetration_over_thickness": 0.011}  # fmt: skip
+    body = {"name": "f-heavy", "fmt": "stl", "units": "cm", "up": "z", "age_years": 25.0,
+            "macro": {"gender": 0.0, "muscle": 0.5, "weight": 1.0, "height": 0.5,
+                      "proportions": 0.5, "cup": 0.5},
+            "import": {"status": "ok", "units": "cm", "up": "z", "units_ok": True,
+                       "up_ok": True, "import_s": 8.0, "height_m": 1.59}}  # fmt: skip
+    md = bodies.markdown({"bodies": [body], "runs": [run]})
+    assert "| f-heavy | dress | 3 | penetration tolerance | 738 | augmented Lagrangian" in md
+    assert "| dress | 1 | 0 | penetration tolerance: 1 | 738 / 738 / 738 | 1 | 51504–51504 |" in md

@@ -9,10 +9,18 @@
   ankles), near the crown one (the head): the end with more *outer* outlines (not nested inside
   another, larger than 5 % of the biggest one, so eye sockets, ears or nostrils do not count)
   is down. Ties (legs together, a torso only) keep the positive direction; give ``up``.
-* **Units.** A full standing body is 1.0–2.3 m tall; in mm, cm, dm, m and inches these ranges
-  do not overlap, so the height along the up axis names the unit. A part of a body (a torso
-  only) falls outside all of them and is read as mm / cm / m by size, as before; give ``units``
-  or ``scale`` for anything else.
+* **Facing.** Standing upright, a body is wider from side to side than from front to back, and
+  its feet point forward: the horizontal axis of largest area-weighted variance is its width
+  (a quarter turn when that is y), and the soles (the lowest 3 % of the stature) reach further
+  forward than the ankles above them (5–8 %). The body is turned about the vertical, by a
+  multiple of 90°, to face −y; without feet to tell the front (the soles less than 1 % of the
+  stature ahead of or behind the ankles: a torso, a dress form) it keeps its facing.
+* **Units.** A full standing body is 1.0–2.5 m tall; in mm, cm, dm, m and inches these ranges
+  do not overlap (inches and centimetres stay apart up to 2.54 × the lower bound), so the
+  height along the up axis names the unit. MakeHuman's tallest body is 2.45 m
+  (:mod:`.population`): with 2.3 m as the upper bound it was read in inches as 0.97 m. A part
+  of a body (a torso only) falls outside all of them and is read as mm / cm / m by size, as
+  before; give ``units`` or ``scale`` for anything else.
 """
 
 from __future__ import annotations
@@ -29,8 +37,9 @@ IArray = npt.NDArray[np.int64]
 
 #: metres per unit
 UNITS: dict[str, float] = {"mm": 0.001, "cm": 0.01, "dm": 0.1, "m": 1.0, "in": 0.0254}
-#: a full standing adult or child from 1.0 to 2.3 m tall
-STATURE_RANGE = (1.0, 2.3)
+#: a full standing adult or child from 1.0 to 2.5 m tall (upper < 2.54 × lower: the ranges
+#: in inches and centimetres must not meet)
+STATURE_RANGE = (1.0, 2.5)
 
 # proper rotations taking the named up axis to +z (for "y": (x, y, z) -> (x, -z, y), so a Y-up
 # model facing +z, the usual OBJ/glTF convention, ends facing -y as the package expects)
@@ -109,3 +118,35 @@ def rotation(up: str) -> Array:
     if up not in ROTATIONS:
         raise ScanError(f"unknown up axis {up!r}", f"use one of {', '.join(ROTATIONS)}")
     return ROTATIONS[up]
+
+
+#: the turns about the vertical, counter-clockwise seen from above [degrees]
+TURNS = (0, 90, 180, 270)
+
+
+def turn_matrix(degrees: int) -> Array:
+    """The rotation about +z by ``degrees`` (a multiple of 90: exact)."""
+    c, s = [(1, 0), (0, 1), (-1, 0), (0, -1)][(degrees // 90) % 4]
+    return np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+
+
+def detect_turn(vertices: Array, triangles: IArray) -> int:
+    """The turn of :data:`TURNS` about the vertical that makes an upright body (+z up) face −y
+    (module docstring: width axis, then the feet)."""
+    c = vertices[triangles].mean(axis=1)
+    w = srf.areas(vertices, triangles)
+    mean = (w[:, None] * c).sum(axis=0) / w.sum()
+    var = (w[:, None] * (c - mean) ** 2).sum(axis=0)
+    depth = 0 if var[1] > 1.3 * var[0] else 1  # front to back: y, unless clearly wider in y
+    lo, h = c[:, 2].min(), np.ptp(c[:, 2])
+    soles = c[:, 2] < lo + 0.03 * h
+    ankles = (c[:, 2] > lo + 0.05 * h) & (c[:, 2] < lo + 0.08 * h)
+    ahead = 0.0
+    if w[soles].sum() > 0 and w[ankles].sum() > 0:
+        ahead = (np.average(c[soles, depth], weights=w[soles])
+                 - np.average(c[ankles, depth], weights=w[ankles]))  # fmt: skip
+    if abs(ahead) < 0.01 * h:  # no feet to tell the front: as it is (a refusal downstream
+        return 0  # is better than a body turned the wrong way round)
+    if depth == 1:
+        return 0 if ahead < 0 else 180
+    return 90 if ahead < 0 else 270  # facing −x: a quarter turn counter-clockwise; +x: three

@@ -9,8 +9,9 @@ arms, legs and head and finds the landmarks (:mod:`.anatomy`), and raises
 :class:`~.errors.ScanError` with the reason otherwise.
 
 Assumed pose: standing, arms clear of the torso (A- or T-pose) or no arms, a full body from the
-feet up. After turning upright the scan's own front stays where it was; for a Y-up scan facing
-+z (the usual OBJ/glTF convention) the front ends at −y.
+feet up. After turning upright the body is turned about the vertical to face −y when its width
+and its feet say which way it faces (:mod:`.orientation`); otherwise its own front stays where it
+was (for a Y-up scan facing +z, the usual OBJ/glTF convention, the front ends at −y).
 """
 
 from __future__ import annotations
@@ -99,6 +100,9 @@ def clean_surface(
     up = up or ori.detect_up(v, t)
     v = v @ ori.rotation(up).T
     report["up"] = up
+    turn = ori.detect_turn(v, t)  # about the vertical, to face −y (orientation module docstring)
+    v = v @ ori.turn_matrix(turn).T
+    report["turned"] = turn
     height = float(np.ptp(v[:, 2]))
     k, label = ori.scale_of(units, scale, height)
     v = v * k
