@@ -553,7 +553,7 @@ def _multipliers(
             max_updates=max_updates, stiffen=contact.kappa, unknown=q,
         )  # fmt: skip
         solver.set_atol(atol)
-        rep.al_updates = len(al.penetration) - 1
+        rep.al_updates = max(len(al.penetration) - 1, 0)
         rep.answer_atol = path_atol
         if not al.penetration:  # no pass converged: the released state back
             uzawa.put_back(st, q, contact.kappa, *released)
