@@ -378,7 +378,7 @@ def _interrupted_folder(b: Bench, name: str, scene: Path | None = None) -> Path:
     return out / FOLDER
 
 
-def _edit(folder: Path, change: Callable[[dict], None], *, reseal: bool) -> None:
+def edit_progress(folder: Path, change: Callable[[dict], None], *, reseal: bool) -> None:
     from fenics_garment.scene import checkpoint
 
     path = folder / "checkpoint" / "progress.json"
@@ -421,28 +421,29 @@ def _scale_q(folder: Path) -> None:
 
 
 LIES: list[tuple[str, Callable[[Path], None]]] = [
-    ("stage 'release' (hand edit)", lambda f: _edit(f, _set("progress.stage", "release"),
+    ("stage 'release' (hand edit)", lambda f: edit_progress(f, _set("progress.stage", "release"),
                                                      reseal=False)),
-    ("stage 'release' (resealed)", lambda f: _edit(f, _set("progress.stage", "release"),
+    ("stage 'release' (resealed)", lambda f: edit_progress(f, _set("progress.stage", "release"),
                                                     reseal=True)),
-    ("stage 'done' (resealed)", lambda f: _edit(f, _set("progress.stage", "done"), reseal=True)),
-    ("negative shrink (resealed)", lambda f: _edit(f, _set("progress.shrink", -0.003),
+    ("stage 'done' (resealed)", lambda f: edit_progress(f, _set("progress.stage", "done"),
+                                                       reseal=True)),
+    ("negative shrink (resealed)", lambda f: edit_progress(f, _set("progress.shrink", -0.003),
                                                     reseal=True)),
-    ("negative step (resealed)", lambda f: _edit(f, _set("progress.step", -0.001),
+    ("negative step (resealed)", lambda f: edit_progress(f, _set("progress.step", -0.001),
                                                   reseal=True)),
-    ("negative spring constant (resealed)", lambda f: _edit(f, _set("progress.c", -5.0),
+    ("negative spring constant (resealed)", lambda f: edit_progress(f, _set("progress.c", -5.0),
                                                              reseal=True)),
-    ("NaN shrink (resealed)", lambda f: _edit(f, _set("progress.shrink", float("nan")),
+    ("NaN shrink (resealed)", lambda f: edit_progress(f, _set("progress.shrink", float("nan")),
                                                reseal=True)),
-    ("shrink above s0 (resealed)", lambda f: _edit(f, _set("progress.shrink", 1.0),
+    ("shrink above s0 (resealed)", lambda f: edit_progress(f, _set("progress.shrink", 1.0),
                                                     reseal=True)),
-    ("solve count negative (resealed)", lambda f: _edit(f, _set("progress.solves", -1),
+    ("solve count negative (resealed)", lambda f: edit_progress(f, _set("progress.solves", -1),
                                                          reseal=True)),
-    ("other package version (resealed)", lambda f: _edit(
+    ("other package version (resealed)", lambda f: edit_progress(
         f, _set("depends.fenics-garment version", "0.0.9"), reseal=True)),
-    ("other meshes (resealed)", lambda f: _edit(f, _set("depends.meshes", "0" * 16),
+    ("other meshes (resealed)", lambda f: edit_progress(f, _set("depends.meshes", "0" * 16),
                                                  reseal=True)),
-    ("other friction coefficient (resealed)", lambda f: _edit(f, _set("progress.mu", 0.05),
+    ("other friction coefficient (resealed)", lambda f: edit_progress(f, _set("progress.mu", 0.05),
                                                                reseal=True)),
     ("rank file byte flipped", _flip),
     ("rank file rewritten, q x 1.01", _scale_q),

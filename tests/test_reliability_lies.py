@@ -4,7 +4,6 @@ records what the state depends on besides the scene (package version, terms hook
 input files, meshes); ``--resume`` refuses a mismatch with one line naming it (exit code 2).
 """
 
-import json
 import math
 import shutil
 from dataclasses import replace
@@ -14,6 +13,7 @@ import numpy as np
 import pytest
 from test_reliability import _run_until, small_tube
 
+from benchmarks.reliability import edit_progress
 from fenics_garment import cli
 from fenics_garment._stack import MPI
 from fenics_garment.scene import checkpoint, config
@@ -95,15 +95,6 @@ def _copy(folder: Path, tmp_path: Path) -> Path:
     return dst
 
 
-def _edit(folder: Path, change, *, reseal: bool) -> None:
-    path = folder / "checkpoint" / "progress.json"
-    meta = json.loads(path.read_text())
-    change(meta)
-    if reseal:
-        meta["seal"] = checkpoint.seal(meta)
-    path.write_text(json.dumps(meta))
-
-
 def _refused(folder: Path, capsys) -> str:
     assert cli.main(["run", "--resume", str(folder), "-q"]) == 2
     err = capsys.readouterr().err.strip()
@@ -140,7 +131,7 @@ EDITS = [
 @pytest.mark.parametrize("change, reseal, words", EDITS)
 def test_a_lying_progress_file_is_refused(interrupted, tmp_path, capsys, change, reseal, words):
     folder = _copy(interrupted, tmp_path)
-    _edit(folder, change, reseal=reseal)
+    edit_progress(folder, change, reseal=reseal)
     assert words in _refused(folder, capsys)
 
 

@@ -13,7 +13,6 @@ References, all independent of the code under test:
 
 from __future__ import annotations
 
-import gzip
 from pathlib import Path
 
 import numpy as np
@@ -31,23 +30,13 @@ TORSO_REGIONS = ("upper_chest", "bust", "underbust", "upper_back", "waist", "abd
                  "lower_back", "hips", "buttocks")  # fmt: skip
 
 
-def _obj_groups(path: Path) -> tuple[np.ndarray, dict[str, list[list[int]]]]:
-    """Vertex positions and faces (0-based, as written) per ``g`` group of an OBJ."""
-    verts, groups, cur = [], {}, None
-    for line in gzip.decompress(path.read_bytes()).decode().splitlines():
-        if line.startswith("v "):
-            verts.append([float(w) for w in line.split()[1:4]])
-        elif line.startswith("g "):
-            cur = line.split()[1]
-        elif line.startswith("f "):
-            groups.setdefault(cur, []).append([int(w.split("/")[0]) - 1 for w in line.split()[1:]])
-    return np.array(verts), groups
-
-
 @pytest.fixture(scope="module")
 def ref():
     """Reference data straight from the file: Y-up decimetres -> our frame (z up, metres)."""
-    v, groups = _obj_groups(MESH)
+    from fenics_garment.geometry.population import base_mesh
+
+    raw = base_mesh()  # the OBJ as written: positions and faces per group
+    v, groups = raw.vertices, raw.groups
     body_idx = np.unique(np.concatenate([np.array(f) for f in groups["body"]]))
     floor = v[body_idx, 1].min()
 
