@@ -56,6 +56,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -75,6 +76,26 @@ class PathPoint:
     step: float  # arc length Δs (or prescribed-displacement increment) of the increment
     cuts: int  # step halvings before it converged
     landed: bool = False  # the point was cut back onto a target (stop_at_load / stop_at)
+    #: Bergan's current stiffness parameter f·K⁻¹f at the path's first point over f·K⁻¹f here
+    #: (1 at the start, → 0 at a limit point, negative beyond it); NaN where not computed
+    stiffness: float = math.nan
+
+
+@dataclass
+class LimitPoint:
+    """A limit point of λ (a fold: λ has a local maximum or minimum along the path) that an
+    increment crossed: the orientation of the tangent's λ component changed sign."""
+
+    load_factor: float  # λ at the fold, from the cubic (Hermite) through the increment's ends
+    kind: str  # "maximum" or "minimum" of λ
+    increment: int  # index in the follower's ``history`` of the point after the fold
+    arc: float  # arc length (step) of the increment that crossed it
+    resolved: bool  # the increment was refined until the estimate met ``limit_rtol``
+
+
+class LimitPointWarning(UserWarning):
+    """Path following crossed a limit point of the load (or jumped over a snap it could not
+    resolve by refining the arc)."""
 
 
 # -- tangent load f = −∂F/∂λ -------------------------------------------------------------------
@@ -214,6 +235,9 @@ class _Stats:
     factorisations: int = 0
     wall: float = 0.0
     landing_solves: int = 0  # trial increments and pins that cut a crossing back onto a target
+    refinements: int = 0  # converged increments rejected and retried shorter at a limit point
+    limit_points: list[LimitPoint] = field(default_factory=list)
+    jumps: int = 0  # increments accepted although they still looked like a skipped snap
 
 
 class _PathFollower:
@@ -230,6 +254,11 @@ class _PathFollower:
         max_cuts: int = 8,
         rtol: float = 1e-8,
         on_step: Callable[[PathPoint], None] | None = None,
+        limit_points: bool = True,
+        limit_rtol: float = 1e-3,
+        jump_ratio: float = 2.0,
+        max_turn: float = 10.0,
+        max_refinements: int = 12,
     ):
         self.solver = solver
         self.model = solver.model
@@ -238,6 +267,9 @@ class _PathFollower:
         self.max_growth, self.max_cuts = max_growth, max_cuts
         self.rtol = rtol
         self.on_step = on_step
+        self.limit_points, self.limit_rtol = limit_points, limit_rtol
+        self.jump_ratio, self.max_refinements = jump_ratio, max_refinements
+        self.max_turn = max_turn
         self.history: list[PathPoint] = []
         self.stats = _Stats()
         p = solver.problem
@@ -256,6 +288,15 @@ class _PathFollower:
         self.lam = float(self.model.load_factor.value)
         self.Dlam_prev = 0.0
         self._x_start = p.b.duplicate()  # the point before an increment that crossed a target
+        self.w: PETSc.Vec | None = None  # diagonal weights of the path's norm (None: all dofs)
+        self._wv = p.b.duplicate()
+        self._Dq_prev_old = p.b.duplicate()
+        self._t0 = p.b.duplicate()  # the tangent dq_t at the start of the increment
+        self._Dlam_prev_old = 0.0
+        self._lam_n = self.lam
+        self._tangent_ready = False  # K is factorised and dq_t, f are those of the current x
+        self._sigma0, self._slope0 = 0.0, math.nan  # λ direction and |dλ/ds| at the start
+        self._fKf0: float | None = None  # f·K⁻¹f at the path's first point (stiffness parameter)
 
     # -- PETSc plumbing
     def _sync_in(self) -> None:
@@ -269,6 +310,12 @@ class _PathFollower:
         self.model.load_factor.value = lam
         self.solver.problem.solver.computeFunction(self.x, self.r)
         return float(self.r.norm())
+
+    def _wdot(self, a: PETSc.Vec, b: PETSc.Vec) -> float:
+        if self.w is None:
+            return float(a.dot(b))
+        self._wv.pointwiseMult(self.w, b)
+        return float(a.dot(self._wv))
 
     def _factorise_and_tangent(self) -> bool:
         p = self.solver.problem
@@ -289,6 +336,9 @@ class _PathFollower:
     def _adjust_step(self, step: float) -> float:  # e.g. land on a target
         return step
 
+    def _slope(self) -> float:  # |dλ/ds| along the tangent dq_t (s: the step's measure)
+        raise NotImplementedError
+
     def _value(self) -> float:
         return float(self.monitor()) if self.monitor is not None else math.nan
 
@@ -298,11 +348,17 @@ class _PathFollower:
         x, lam_n = self.x, self.lam
         step = self._step = self._adjust_step(step)
         x.copy(self.x_n)
+        self._lam_n = lam_n
         self.model.load_factor.value = lam_n
-        ok = self._factorise_and_tangent()
+        ok = True if self._tangent_ready else self._factorise_and_tangent()
+        self._tangent_ready = False
         Dlam = self._predict(step) if ok else math.nan
         if not np.isfinite(Dlam):
             return self._restore()
+        self._sigma0, self._slope0 = math.copysign(1.0, Dlam), self._slope()
+        self.dq_t.copy(self._t0)
+        if self._fKf0 is None:
+            self._fKf0 = float(self.f.dot(self.dq_t))
         self.Dq.set(0.0)
         self.Dq.axpy(Dlam, self.dq_t)
         x.axpy(1.0, self.Dq)
@@ -313,6 +369,8 @@ class _PathFollower:
                 return self._restore()
             if rnorm <= tol:
                 self.lam = lam_n + Dlam
+                self.Dq_prev.copy(self._Dq_prev_old)  # kept for _reject
+                self._Dlam_prev_old = self.Dlam_prev
                 self.Dlam_prev = Dlam
                 self.Dq.copy(self.Dq_prev)
                 self.stats.newton_iterations += it - 1
@@ -333,10 +391,71 @@ class _PathFollower:
         return self._restore()
 
     def _restore(self) -> None:
+        self._tangent_ready = False
         self.x_n.copy(self.x)
         self._sync_out(self.x)
         self.model.load_factor.value = self.lam
         return None
+
+    def _reject(self) -> None:
+        """Undo the increment just converged: back to the point before it."""
+        self._restore()
+        self._Dq_prev_old.copy(self.Dq_prev)
+        self.Dlam_prev = self._Dlam_prev_old
+        self.lam = self._lam_n
+        self.model.load_factor.value = self.lam
+
+    def _examine(self) -> _Verdict:
+        """After an increment from (x_n, λ_n) converged: factorise K at the new point (kept for
+        the next predictor) and compare the path's tangent at the two ends.
+
+        * the λ component of the oriented tangent (the sign of the next predictor's Δλ)
+          changed sign: the increment crossed a limit point (fold) of λ; its load is the
+          extremum of the cubic (Hermite) λ(s) through the two ends and their slopes dλ/ds;
+        * no change of sign, but the secant |Δλ|/Δs is ``jump_ratio`` times below |dλ/ds| at
+          both ends: the path between was far softer than at either end, i.e. the increment
+          jumped over a snap (a maximum and a minimum of λ) — the corrector converged on the
+          far branch.
+        """
+        verdict = _Verdict()
+        ok = self._factorise_and_tangent()
+        self._tangent_ready = ok
+        if not ok:
+            return verdict
+        fkf = float(self.f.dot(self.dq_t))
+        if self._fKf0 and fkf != 0.0:
+            verdict.stiffness = self._fKf0 / fkf
+        if not self.limit_points:
+            return verdict
+        h, lam0, lam1 = self._step, self._lam_n, self.lam
+        sigma1 = math.copysign(1.0, self._predict(1.0))
+        d0, d1 = self._sigma0 * self._slope0 * h, sigma1 * self._slope() * h  # dλ/dt, t ∈ [0, 1]
+        if not (np.isfinite(d0) and np.isfinite(d1)) or h <= 0.0:
+            return verdict
+        verdict.turn = max(
+            self._angle(self.Dq, self._t0, self._sigma0), self._angle(self.Dq, self.dq_t, sigma1)
+        )
+        if sigma1 != self._sigma0:
+            lam_star = _hermite_extremum(lam0, lam1, d0, d1)
+            kind = "maximum" if self._sigma0 > 0 else "minimum"
+            end = max(lam0, lam1) if kind == "maximum" else min(lam0, lam1)
+            scale = max(abs(lam_star), abs(lam0), abs(lam1))
+            verdict.fold = (lam_star, kind)
+            verdict.refine = abs(lam_star - end) > self.limit_rtol * scale
+        elif abs(lam1 - lam0) * self.jump_ratio < min(abs(d0), abs(d1)):
+            verdict.jump = True
+        if verdict.turn > self.max_turn:
+            verdict.jump = verdict.fold is None
+            verdict.refine = True
+        verdict.refine = verdict.refine or verdict.jump
+        return verdict
+
+    def _angle(self, a: PETSc.Vec, b: PETSc.Vec, sign: float) -> float:
+        """The angle (degrees) between ``a`` and ``sign`` × ``b`` in the path's norm."""
+        ab = math.sqrt(self._wdot(a, a) * self._wdot(b, b))
+        if not ab > 0.0:
+            return 0.0
+        return math.degrees(math.acos(min(max(sign * self._wdot(a, b) / ab, -1.0), 1.0)))
 
     def _tolerance(self) -> float:
         self.tangent.assemble(self.x, self.f)
@@ -357,13 +476,26 @@ class _PathFollower:
     ) -> list[PathPoint]:
         t0 = time.perf_counter()
         self._sync_in()
+        self._tangent_ready = False
         self.lam = float(self.model.load_factor.value)
         tol = self._tolerance()
-        cuts = done = 0
+        if self.lam != 0.0 and not self._residual(self.lam) <= tol and self._residual(0.0) <= tol:
+            self.lam = 0.0  # an unloaded state (e.g. q = 0 of a new model, whose λ is 1)
+        self.model.load_factor.value = self.lam
+        cuts = done = refined = 0
         try:
             while done < max_steps:
                 f_n, lam_n = (target.gap(self) if target else 0.0), self.lam
                 its = self._increment(step, tol)
+                verdict = _Verdict()
+                if its is not None:
+                    verdict = self._examine()
+                    if verdict.refine and refined < self.max_refinements and step / 2 >= min_step:
+                        self._reject()  # the arc crossed a fold unresolved or jumped: shorter
+                        self.stats.refinements += 1
+                        refined += 1
+                        step /= 2
+                        continue
                 landed = False
                 if its is not None and target is not None:
                     f_c = target.gap(self)
@@ -382,10 +514,14 @@ class _PathFollower:
                             f"{cuts} times)",
                         )  # fmt: skip
                     continue
-                point = PathPoint(self.lam, self._value(), its, self._step, cuts, landed)
+                point = PathPoint(
+                    self.lam, self._value(), its, self._step, cuts, landed, verdict.stiffness
+                )
                 self.history.append(point)
                 self.stats.increments += 1
                 done += 1
+                self._report(verdict, lam_n, refined)
+                refined = 0
                 if self.on_step:
                     self.on_step(point)
                 cuts = 0
@@ -393,12 +529,40 @@ class _PathFollower:
                     break
                 if lambda_max is not None and self.lam >= lambda_max:
                     break
-                factor = math.sqrt(self.target_iterations / max(its, 1))
-                step = min(max(step * min(max(factor, 0.5), self.max_growth), min_step), max_step)
+                factor = min(
+                    max(math.sqrt(self.target_iterations / max(its, 1)), 0.5), self.max_growth
+                )
+                if self.limit_points and verdict.turn > 0.0:  # the arc that turns by max_turn
+                    factor = min(factor, max(self.max_turn / verdict.turn, 0.5))
+                step = min(max(step * factor, min_step), max_step)
         finally:
             self.model.load_factor.value = self.lam
             self.stats.wall += time.perf_counter() - t0
         return self.history
+
+    def _report(self, verdict: _Verdict, lam_n: float, refined: int) -> None:
+        """Record and announce a limit point or a jump the accepted increment crossed."""
+        index = len(self.history) - 1
+        where = (
+            f"between λ = {lam_n:.6g} and {self.lam:.6g} (increment {index}, arc {self._step:.3g})"
+        )
+        if verdict.fold is not None:
+            lam_star, kind = verdict.fold
+            resolved = not verdict.refine
+            self.stats.limit_points.append(LimitPoint(lam_star, kind, index, self._step, resolved))
+            note = "" if resolved else f", not resolved after {refined} refinements"
+            warnings.warn(
+                f"path following crossed a limit point: λ {kind} ≈ {lam_star:.6g} {where}{note}",
+                LimitPointWarning, stacklevel=4,
+            )  # fmt: skip
+        elif verdict.jump:
+            self.stats.jumps += 1
+            warnings.warn(
+                f"path following may have jumped over a snap {where}: the load changed "
+                f"{self.jump_ratio:g}× less than the tangents at both ends predict, and "
+                f"{refined} refinements of the arc did not resolve it; take a smaller first step",
+                LimitPointWarning, stacklevel=4,
+            )  # fmt: skip
 
     # -- landing on a target (stop_at_load, stop_at)
     def _land(
@@ -407,6 +571,7 @@ class _PathFollower:
         """The increment of arc ``step`` from (x_n, λ_n) crossed ``target`` (gap f_n before, f_c
         after, opposite signs): cut it back onto the target. Returns the Newton iterations;
         the state is on the target (pinned), or within ``target.tol`` of it, else SolveFailed."""
+        self._tangent_ready = False
         self.x_n.copy(self._x_start)
         its_total = 0
         s_lo, g_lo, s_hi, g_hi = 0.0, f_n, step, f_c
@@ -460,6 +625,7 @@ class _PathFollower:
     def _pin(self, target: _Target, tol: float) -> int | None:
         """Bordered Newton from the current state with the target as the constraint (λ = λ*, or
         e·q = w*); iterations, or None with the state restored."""
+        self._tangent_ready = False
         x = self.x
         x.copy(self.x_n)
         lam0 = self.lam
@@ -498,6 +664,32 @@ class _PathFollower:
     #: regula falsi trials (and pins) to land on a target; Newton iterations of a pin
     MAX_LANDING = 40
     PIN_MAX_IT = 8
+
+
+@dataclass
+class _Verdict:
+    """What :meth:`_PathFollower._examine` found on a converged increment."""
+
+    stiffness: float = math.nan
+    fold: tuple[float, str] | None = None  # (λ at the fold, "maximum" / "minimum")
+    jump: bool = False
+    refine: bool = False
+    turn: float = 0.0  # degrees between the increment and the tangents at its ends
+
+
+def _hermite_extremum(lam0: float, lam1: float, d0: float, d1: float) -> float:
+    """The extremum of the cubic λ(t), t ∈ [0, 1], with λ(0) = lam0, λ(1) = lam1, λ'(0) = d0 and
+    λ'(1) = d1 of opposite signs (one root of λ' in (0, 1)); an end value if none is found."""
+    delta = lam1 - lam0
+    a, b, c = -6.0 * delta + 3.0 * (d0 + d1), 6.0 * delta - 4.0 * d0 - 2.0 * d1, d0
+    roots = np.roots([a, b, c]) if a != 0.0 else ([-c / b] if b != 0.0 else [])
+    ts = [float(r.real) for r in np.atleast_1d(roots) if abs(r.imag) < 1e-12 and 0 <= r.real <= 1]
+    if not ts:
+        return max(lam0, lam1) if d0 > 0 else min(lam0, lam1)
+    t = ts[0]
+    h00, h10, h01, h11 = (2 * t**3 - 3 * t**2 + 1, t**3 - 2 * t**2 + t, -2 * t**3 + 3 * t**2,
+                          t**3 - t**2)  # fmt: skip
+    return h00 * lam0 + h10 * d0 + h01 * lam1 + h11 * d1
 
 
 @dataclass
@@ -556,19 +748,15 @@ class ArcLength(_PathFollower):
         self.w = weights
         self.psi2 = psi * psi
         self._fresh_sign = 1.0
-        self._wv = solver.problem.b.duplicate()
         self._a = solver.problem.b.duplicate()
 
-    def _wdot(self, a: PETSc.Vec, b: PETSc.Vec) -> float:
-        if self.w is None:
-            return float(a.dot(b))
-        self._wv.pointwiseMult(self.w, b)
-        return float(a.dot(self._wv))
+    def _slope(self) -> float:
+        return 1.0 / math.sqrt(self._wdot(self.dq_t, self.dq_t) + self.psi2)
 
     def _predict(self, step: float) -> float:
         tt = self._wdot(self.dq_t, self.dq_t)
         dlam = step / math.sqrt(tt + self.psi2)
-        if self.history:
+        if self.history or self.Dlam_prev != 0.0:
             sign = self._wdot(self.Dq_prev, self.dq_t) + self.psi2 * self.Dlam_prev
             dlam = math.copysign(dlam, sign) if sign != 0 else dlam
         else:  # a fresh path: up in λ, or down with run(..., reverse=True)
@@ -675,6 +863,10 @@ class DisplacementControl(_PathFollower):
     def _predict(self, step: float) -> float:
         et = self.probe.of(self.dq_t)
         return self.sign * step / et if et != 0 else math.nan
+
+    def _slope(self) -> float:
+        et = abs(self.probe.of(self.dq_t))
+        return 1.0 / et if et != 0 else math.inf
 
     def _correct(self, step: float, Dlam: float) -> float | None:
         et = self.probe.of(self.dq_t)

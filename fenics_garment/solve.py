@@ -614,13 +614,26 @@ class LoadStepper:
         elif kind == "tangent":
             self.solver.stale_newton_step()
 
-    def run(self, target: float = 1.0, *, from_current: bool = False) -> list[StepRecord]:
-        """Step λ up to ``target``; returns the history of accepted steps.
+    def run(
+        self, target: float = 1.0, *, from_current: bool = False, back: bool = True
+    ) -> list[StepRecord]:
+        """Step λ to ``target`` and stop there exactly; returns the history of accepted steps.
 
         Starts from λ = 0 on this stepper's first run and from where it stopped on later runs.
         ``from_current=True`` starts from the model's current load factor and state instead —
         to continue after path following (:mod:`fenics_garment.path`), which leaves the model
         at a converged (q, λ) that this stepper has not seen.
+
+        A model already *beyond* the target (``from_current=True`` at λ > ``target``, e.g. where
+        an arc length with ``lambda_max`` stopped past it) is taken back along its equilibrium
+        path: :class:`~fenics_garment.path.ArcLength` from the current state towards decreasing
+        λ with ``stop_at_load=target``, which ends exactly at λ = ``target`` on the branch the
+        model is on (a first load step of (λ − target)/``steps``). Where the path turns at a
+        limit point before reaching the target, it stops with :class:`SolveFailed` naming the
+        limit. ``back=False`` refuses instead (a one-line ValueError). Load stepping itself only
+        increases λ and cannot stop at a displacement: for that use
+        ``ArcLength.run(..., stop_at=(probe, w))`` or
+        :class:`~fenics_garment.path.DisplacementControl`.
         """
         solver = self.solver
         model = solver.model
@@ -630,12 +643,12 @@ class LoadStepper:
         current = float(model.load_factor.value)
         lam = current if (self.history or from_current) else 0.0
         if from_current and lam > target + 1e-14:
+            if back:
+                return self._back_to(target, lam)
             raise ValueError(
-                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}; load stepping "
-                f"only increases λ: to come back to λ = {target:.6g} along the path call "
-                f"fenics_garment.path.ArcLength(solver).run(step, stop_at_load={target:.6g}, "
-                "reverse=True) (and to stop there in the first place, run(..., "
-                f"stop_at_load={target:.6g}) instead of lambda_max)"
+                f"the model is at λ = {lam:.6g}, beyond the target {target:.6g}, and back=False: "
+                f"run(target, from_current=True) takes it back along the path to λ = "
+                f"{target:.6g}"
             )
         dlam = (target - lam) / self.steps
         q_prev = q.x.array.copy()
@@ -675,4 +688,36 @@ class LoadStepper:
                         raise SolveFailed(lam + step, its, reason)
         finally:
             solver.set_rtol(rtol)
+        return self.history
+
+    def _back_to(self, target: float, lam: float) -> list[StepRecord]:
+        """From λ = ``lam`` > ``target`` back along the path to λ = ``target`` exactly."""
+        from fenics_garment.path import ArcLength
+
+        path = ArcLength(self.solver)
+
+        def turned(_) -> bool:  # a minimum of λ above the target: the path leaves it
+            return any(p.kind == "minimum" for p in path.stats.limit_points)
+
+        points = path.run(
+            (lam - target) / max(self.steps, 1), stop_at_load=target, reverse=True, stop=turned
+        )
+        for p in points:
+            rec = StepRecord(p.load_factor, p.iterations, 1, p.cuts)
+            self.history.append(rec)
+            self.solver.timings.steps += 1
+            if self.on_step:
+                self.on_step(rec)
+        if not (points and points[-1].landed):
+            now = float(self.solver.model.load_factor.value)
+            why = (
+                f"the path turns at a minimum λ ≈ {path.stats.limit_points[-1].load_factor:.6g}"
+                if turned(None)
+                else f"it is at λ = {now:.6g} after {len(points)} increments"
+            )
+            raise SolveFailed(
+                now, 0, 0,
+                f"going back from λ = {lam:.6g} along the path did not reach λ = {target:.6g}: "
+                f"{why}",
+            )  # fmt: skip
         return self.history
