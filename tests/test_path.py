@@ -20,8 +20,14 @@ import numpy as np
 import pytest
 
 from fenics_garment._stack import MPI, dolfinx, ufl
-from fenics_garment.path import ArcLength, DisplacementControl, DofProbe, newtonal_path
-from fenics_garment.solve import LoadStepper, NonlinearSolver
+from fenics_garment.path import (
+    ArcLength,
+    DisplacementControl,
+    DofProbe,
+    LimitPointWarning,
+    newtonal_path,
+)
+from fenics_garment.solve import LoadStepper, NonlinearSolver, SolveFailed
 
 K = 0.5
 P_LIMIT = 2 / (3 * math.sqrt(3))  # ±, at u₁ = 1 ∓ 1/√3
@@ -144,8 +150,13 @@ def test_load_stepping_continues_after_path_following(truss):
     first = min(x.real for x in roots if abs(x.imag) < 1e-12 and x.real > 0)
     assert first < 1 - 1 / math.sqrt(3)
     assert u1() == pytest.approx(first, abs=1e-8) and history[-1].load_factor == 0.3
-    with pytest.raises(ValueError, match="beyond the target"):
-        LoadStepper(solver).run(0.2, from_current=True)
+    with pytest.raises(ValueError, match="beyond the target") as err:
+        LoadStepper(solver).run(0.2, from_current=True, back=False)
+    assert "\n" not in str(err.value)
+    # back (the default): down the same branch to λ = 0.2 exactly, the first root of r = 0.2
+    LoadStepper(solver).run(0.2, from_current=True)
+    assert float(model.load_factor.value) == 0.2
+    assert u1() == pytest.approx(_real_roots([1.0, -3.0, 2.0, -0.2])[0], abs=1e-8)
 
 
 def _real_roots(coefficients) -> list[float]:
@@ -187,21 +198,74 @@ def test_arc_length_stops_exactly_at_a_displacement(truss):
 
 
 def test_going_back_to_a_load_the_path_has_passed(truss):
-    """Arc length with ``lambda_max = 1`` ends beyond λ = 1; load stepping refuses to go back and
-    names the call that does, which lands exactly on λ = 1 on the same (inverted) branch."""
+    """Arc length with ``lambda_max = 1`` ends beyond λ = 1 (issue 40: λ = 2.27);
+    ``LoadStepper.run(1, from_current=True)`` takes it back along the path and stops exactly at
+    λ = 1 on the same (inverted) branch: u₁ the largest root of r(u₁) = 1; so does
+    ``ArcLength.run(..., stop_at_load=1, reverse=True)``."""
     model, solver = truss
-    u1 = _probe(model, 0)
-    ArcLength(solver).run(0.02, lambda_max=1.0)
+    u1, u2 = _probe(model, 0), _probe(model, 1)
+    root = _real_roots([1.0, -3.0, 2.0, -1.0])[-1]
+    with pytest.warns(LimitPointWarning):
+        ArcLength(solver).run(0.02, lambda_max=1.0)
     beyond = float(model.load_factor.value)
     assert beyond > 1.0
-    with pytest.raises(ValueError, match=r"stop_at_load=1, reverse=True") as err:
-        LoadStepper(solver).run(1.0, from_current=True)
-    assert "\n" not in str(err.value)
+    stepper = LoadStepper(solver)
+    history = stepper.run(1.0, from_current=True)
+    assert history[-1].load_factor == 1.0 and float(model.load_factor.value) == 1.0
+    assert all(1.0 <= h.load_factor < beyond for h in history)  # down, not up
+    assert u1() == pytest.approx(root, abs=1e-8) and u2() == pytest.approx(u2_of(root), abs=1e-8)
+    ArcLength(solver).run(0.02, lambda_max=1.5)  # beyond again, then back by arc length
+    beyond = float(model.load_factor.value)
     back = ArcLength(solver)
     last = back.run(0.02, stop_at_load=1.0, reverse=True)[-1]
     assert last.landed and last.load_factor == 1.0
-    assert u1() == pytest.approx(_real_roots([1.0, -3.0, 2.0, -1.0])[-1], abs=1e-8)
-    assert all(p.load_factor < beyond for p in back.history)  # it went down, not up
+    assert u1() == pytest.approx(root, abs=1e-8)
+    assert all(p.load_factor < beyond for p in back.history)
+
+
+def test_going_back_stops_at_a_limit_point(truss):
+    """From λ = 0.3 on the inverted branch (u₁ > 1 + 1/√3), λ = −0.5 lies beyond its minimum
+    −2/(3√3): going back refuses in one line naming the limit, not a NaN or a wrong branch."""
+    model, solver = truss
+    path = ArcLength(solver)
+    with pytest.warns(LimitPointWarning):
+        path.run(0.02, stop_at_load=-0.2)  # over the maximum, down the branch
+    with pytest.warns(LimitPointWarning):
+        path.run(0.02, stop_at_load=0.3)  # on: through the minimum, up the inverted branch
+    assert _probe(model, 0)() > 1 + 1 / math.sqrt(3)
+    with pytest.raises(SolveFailed, match=r"turns at a minimum λ ≈ -0\.3849") as err:
+        with pytest.warns(LimitPointWarning):
+            LoadStepper(solver).run(-0.5, from_current=True)
+    assert "\n" not in str(err.value)
+
+
+@pytest.mark.parametrize("first_step", [0.02, 0.1, 0.5])
+def test_limit_points_found_and_resolved(truss, first_step):
+    """Issue 44 item 3: whatever the first step, the snap-through's maximum and minimum of λ are
+    detected (the tangent's λ component turns), the arc is refined there until the fold's load
+    (the extremum of the cubic through the increment's ends) is within ``limit_rtol``, and a
+    warning names each. Without the refinement, a first step of 0.5 jumps from λ = 0.385 to
+    −0.365 in one increment."""
+    model, solver = truss
+    u1 = _probe(model, 0)
+    path = ArcLength(solver, monitor=u1)
+    with pytest.warns(LimitPointWarning) as caught:
+        path.run(first_step, lambda_max=1.0)
+    folds = path.stats.limit_points
+    assert [p.kind for p in folds] == ["maximum", "minimum"] and all(p.resolved for p in folds)
+    assert folds[0].load_factor == pytest.approx(P_LIMIT, rel=1e-4)
+    assert folds[1].load_factor == pytest.approx(-P_LIMIT, rel=1e-4)
+    assert len([w for w in caught if "limit point" in str(w.message)]) == 2
+    lam = np.array([p.load_factor for p in path.history])
+    a = np.array([p.value for p in path.history])
+    assert first_maximum(lam) == pytest.approx(P_LIMIT, rel=2e-3)  # traced, not jumped
+    assert lam.min() == pytest.approx(-P_LIMIT, rel=2e-3)
+    assert np.max(np.abs(np.diff(a))) < 0.25
+    # Bergan's stiffness parameter: 1 at the start, through 0 to negative after the maximum
+    sp = np.array([p.stiffness for p in path.history])
+    i = folds[0].increment
+    assert 1.0 >= sp[0] > sp[i - 1] > 0 > sp[i]  # the truss softens up to its maximum
+    assert path.stats.refinements > 0 or first_step == 0.02
 
 
 # Sze et al. 2004 §3.6, hinged roof, P2B-P2B quarter model n×n, against the first limit point of

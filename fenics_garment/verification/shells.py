@@ -528,7 +528,12 @@ def hinged_roof(
             stop=lambda p: p.value >= w_end,
         )  # fmt: skip
         stats = path.stats
-        extra = {"cuts": stats.cuts, "factorisations": stats.factorisations}
+        extra = {
+            "cuts": stats.cuts,
+            "factorisations": stats.factorisations,
+            "refinements": stats.refinements,
+            "limit_points": [(lp.load_factor * P_ref, lp.kind) for lp in stats.limit_points],
+        }
         its = stats.newton_iterations
     elif method == "displacement":
         control = DisplacementControl(solver, uz)
@@ -561,6 +566,78 @@ def hinged_roof(
     )  # fmt: skip
 
 
+#: Sze et al. 2004, §3.5, the open-ended cylinder pulled out by two diametrically opposite radial
+#: forces P (P_max = 40000): (P/P_max, W_A, −U_B, −U_C), the radial displacements at the loaded
+#: point A, at B (mid-length, 90° from A) and at C (free end, 90° from A), from Sze's table of the
+#: ABAQUS S4R reference; transcribed in zanoni-mbdyn/MBDyn,
+#: tests/plates/sze2004/sze35/sze35_ref.dat (commit 425115db). The path snaps between
+#: P/P_max = 0.50 and 0.525 (−U_B jumps from 3.653 to 4.061).
+PULLOUT_PATH = np.array([
+    [0.00, 0.000, 0.000, 0.000], [0.025, 0.819, 0.864, 0.872], [0.05, 1.260, 1.471, 1.493],
+    [0.075, 1.527, 1.901, 1.946], [0.10, 1.707, 2.217, 2.293], [0.15, 1.936, 2.641, 2.792],
+    [0.20, 2.079, 2.904, 3.106], [0.25, 2.180, 3.087, 3.310], [0.30, 2.257, 3.227, 3.452],
+    [0.35, 2.321, 3.342, 3.556], [0.40, 2.376, 3.443, 3.632], [0.45, 2.425, 3.539, 3.688],
+    [0.50, 2.473, 3.653, 3.718], [0.525, 2.543, 4.061, 3.580], [0.55, 2.577, 4.171, 3.518],
+    [0.60, 2.618, 4.274, 3.452], [0.65, 2.648, 4.338, 3.410], [0.70, 2.672, 4.385, 3.378],
+    [0.75, 2.692, 4.423, 3.353], [0.80, 2.710, 4.455, 3.332], [0.85, 2.726, 4.483, 3.313],
+    [0.90, 2.741, 4.508, 3.297], [0.95, 2.755, 4.530, 3.283], [1.00, 2.768, 4.551, 3.269],
+])  # fmt: skip
+
+
+def pullout_cylinder(
+    n: int = 8, element: str | None = None, *, initial_load_step: float = 0.05,
+    comm=MPI.COMM_WORLD, **arc_length,
+) -> CaseResult:  # fmt: skip
+    """Sze et al. 2004, §3.5: pull-out of an open-ended cylinder (R = 4.953, L = 10.35,
+    t = 0.094, E = 10.5e6, ν = 0.3125) by two opposite radial forces P at mid-length; one
+    eighth (the quarter circumference, half the length: 1.5n × n cells) with symmetry planes
+    x = 0, z = 0 and y = L/2, the end y = 0 free, P/4 at A = (0, L/2, R).
+
+    The path is followed by :class:`~fenics_garment.path.ArcLength` from the unloaded state
+    (first arc that of a tangent step ``initial_load_step``; ``arc_length`` passed to its
+    constructor) and stopped exactly at P = P_max (``stop_at_load = 1``). Its snap between
+    0.50 and 0.525 P_max (:data:`PULLOUT_PATH`) is a maximum and a minimum of the load close
+    together. ``value``: W_A at P_max against 2.768; ``extra``: −U_B, −U_C there and the whole
+    path, the limit points found and the path's statistics.
+    """
+    from fenics_garment.path import ArcLength, DofProbe
+
+    t0 = time.perf_counter()
+    R, L, P_max = 4.953, 10.35, 40000.0
+    mesh = parametric_surface_mesh(
+        comm, lambda a, y: np.array([R * np.cos(a), y, R * np.sin(a)]),
+        (0.0, math.pi / 2), (0.0, L / 2), (max(1, round(1.5 * n)), n),
+    )  # fmt: skip
+    material = Isotropic(E=10.5e6, nu=0.3125, thickness=0.094)
+    model = ShellModel(ShellGeometry.from_mesh(mesh, warp=(0, 1, 0)), material, element=element)
+    plane = lambda axis, at: lambda x: np.isclose(x[axis], at, atol=1e-9)  # noqa: E731
+    bcs = (B.symmetry_plane(model, plane(0, 0.0), axis=0)
+           + B.symmetry_plane(model, plane(2, 0.0), axis=2)
+           + B.symmetry_plane(model, plane(1, L / 2), axis=1))  # fmt: skip
+    A, B_, C = (0.0, L / 2, R), (R, L / 2, 0.0), (R, 0.0, 0.0)
+    solver = NonlinearSolver(model, bcs, point_loads=[PointLoad(A, (0.0, 0.0, P_max / 4))])
+    model.load_factor.value = 0.0
+    w_a = DofProbe.at_point(model, A, component=2)
+    u_b = DofProbe.at_point(model, B_, component=0)
+    u_c = DofProbe.at_point(model, C, component=0)
+    path = ArcLength(solver, monitor=lambda: -u_b(), **arc_length)
+    curve = [(0.0, 0.0, 0.0, 0.0)]
+    path.on_step = lambda p: curve.append((p.load_factor, w_a(), -u_b(), -u_c()))
+    path.run(initial_load_step, stop_at_load=1.0)
+    stats = path.stats
+    solver.timings.steps = stats.increments
+    solver.timings.newton_iterations = stats.newton_iterations
+    ref = PULLOUT_PATH[-1]
+    return _result(
+        "sze-3.5-pullout", model, solver, w_a(), ref[1], t0,
+        u_B=-u_b(), u_B_reference=ref[2], u_C=-u_c(), u_C_reference=ref[3],
+        load_factor=float(model.load_factor.value), increments=stats.increments,
+        refinements=stats.refinements, cuts=stats.cuts, jumps=stats.jumps,
+        limit_points=[(lp.load_factor, lp.kind, lp.resolved) for lp in stats.limit_points],
+        path=[list(map(float, c)) for c in curve],
+    )  # fmt: skip
+
+
 CASES: dict[str, Callable[..., CaseResult]] = {
     "scordelis-lo": scordelis_lo,
     "pinched-cylinder": pinched_cylinder,
@@ -571,6 +648,7 @@ CASES: dict[str, Callable[..., CaseResult]] = {
     "sze-3.2-rollup": cantilever_rollup,
     "sze-3.3-slit-annulus": slit_annular_plate,
     "sze-3.4-hemisphere": sze_hemisphere,
+    "sze-3.5-pullout": pullout_cylinder,
     "sze-3.6-hinged-roof-12.7": lambda n=8, **kw: hinged_roof(12.7, n, **kw),
     "sze-3.6-hinged-roof-6.35": lambda n=8, **kw: hinged_roof(6.35, n, **kw),
     "sze-3.7-semicylinder": pinched_semicylinder,
