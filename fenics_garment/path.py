@@ -26,8 +26,29 @@ round-off), its residual converged like every point's (where the pin cannot conv
 a limit point, the regula falsi goes on to within 1e-10 × max(1, |target|), or SolveFailed).
 ``reverse=True`` follows the path backwards from the current state (the direction opposite to
 the last increment, or decreasing λ on a fresh path): how to come back to a λ* that the path
-has passed. :class:`~fenics_garment.solve.LoadStepper` only raises λ and
-refuses a target below the current λ, naming this call.
+has passed; :meth:`LoadStepper.run(λ*, from_current=True) <fenics_garment.solve.LoadStepper.run>`
+on a model beyond λ* does exactly that.
+
+**Limit points** are detected, the arc refined there, and reported. After each converged
+increment K is factorised at the new point (the factorisation the next predictor uses) and the
+increment is compared with the tangent at its two ends:
+
+* the λ component of the oriented tangent (the sign of the next predictor's Δλ) changed sign:
+  the increment crossed a fold of λ (a maximum or a minimum, i.e. det K changed sign with its
+  null vector not orthogonal to the load). Its load is the extremum of the cubic λ(s) through the
+  ends and their slopes dλ/ds; the increment is retried at half the arc until that estimate is
+  within ``limit_rtol`` of the nearer end;
+* the increment turned more than ``max_turn`` degrees from either tangent, or its secant
+  |Δλ|/Δs is ``jump_ratio`` times below |dλ/ds| at both ends: it jumped to another shape (e.g.
+  over a maximum and a minimum close together, whose ends look alike) and is retried shorter.
+
+At most ``max_refinements`` halvings per increment (and not below the smallest arc); the next arc
+is sized to turn by at most ``max_turn``. Each fold is recorded in ``stats.limit_points``
+(:class:`LimitPoint`) and announced by a :class:`LimitPointWarning`; a jump that refinement
+could not resolve is counted in ``stats.jumps`` and warned about. Bergan's current stiffness
+parameter, f·K⁻¹f at the path's start over f·K⁻¹f at the point, is on each :class:`PathPoint`
+(``stiffness``; it also changes sign where f·K⁻¹f crosses zero with K regular, so it is reported
+rather than used to decide). ``limit_points=False`` turns the detection off.
 
 Both are solved by the *bordering* method: each Newton iteration factorises K once and solves it
 twice, K δq_R = −F (the load-controlled Newton correction) and K δq_T = f (the tangent
@@ -725,6 +746,11 @@ class ArcLength(_PathFollower):
     ``"all"`` (every dof; the default for other models) or a PETSc vector.
     ``run(initial_load_step)`` sizes the first arc so that its tangent predictor is the load
     step Δλ₀.
+
+    Keywords of every path follower: ``monitor`` (a scalar recorded on each point), ``max_it``,
+    ``target_iterations``, ``max_growth``, ``max_cuts``, ``rtol`` (residual tolerance relative to
+    the load vector), ``on_step``; limit points (module doc): ``limit_points`` (True),
+    ``limit_rtol`` (1e-3), ``max_turn`` (10°), ``jump_ratio`` (2), ``max_refinements`` (12).
     """
 
     def __init__(
@@ -815,7 +841,9 @@ class ArcLength(_PathFollower):
 
         The arc length of the first increment is that of a tangent step Δλ₀ =
         ``|initial_load_step|``; later ones adapt within [``min_step_ratio``,
-        ``max_step_ratio``] × that."""
+        ``max_step_ratio``] × that, and are refined at limit points (module doc). A state out
+        of equilibrium at the model's λ but in equilibrium at λ = 0 (q = 0 of a new
+        :class:`~fenics_garment.shell.model.ShellModel`, whose λ is 1) starts at λ = 0."""
         if stop_at_load is not None and stop_at is not None:
             raise ValueError("give stop_at_load or stop_at, not both")
         target = None

@@ -283,20 +283,26 @@ def test_limit_points_found_and_resolved(truss, first_step):
 def test_sze_hinged_roof_limit_load(thickness):
     from fenics_garment.verification import shells
 
-    r = shells.hinged_roof(thickness, 8)
+    with pytest.warns(LimitPointWarning):
+        r = shells.hinged_roof(thickness, 8)
     P, w = np.array(r.extra["P"]), np.array(r.extra["w"])
     print(
         f"t = {thickness}: P_lim {r.value:.1f} N vs {r.reference:.1f} ({100 * r.rel_error:+.2f} %),"
         f" w_lim {r.extra['w_limit']:.2f} vs {r.extra['w_limit_reference']:.2f} mm,"
-        f" {r.extra['increments']} increments, {r.newton_its} Newton its, {r.wall_s:.1f} s"
+        f" {r.extra['increments']} increments, {r.newton_its} Newton its, {r.wall_s:.1f} s;"
+        f" limit points {r.extra['limit_points']}, {r.extra['refinements']} refinements"
     )
     assert abs(r.rel_error) < 0.01
     assert r.extra["w_limit"] == pytest.approx(r.extra["w_limit_reference"], rel=0.05)
     assert w[-1] >= 30.0 and r.extra["cuts"] == 0
+    # the first limit point found on the path (refined to limit_rtol) is Sze's limit load
+    P_fold, kind = r.extra["limit_points"][0]
+    assert kind == "maximum" and P_fold == pytest.approx(r.reference, rel=0.01)
     i = int(np.argmax(P >= r.value * 0.999))
     assert P[i:].min() < 0.5 * r.value  # past the limit point: the descending branch was traced
     if thickness == 6.35:  # the centre deflection turns back (snap-back) and the load reverses
         assert np.any(np.diff(w[i:]) < -0.1) and P.min() < 0
+    assert [k for _, k in r.extra["limit_points"]] == ["maximum", "minimum"]
 
 
 @pytest.mark.slow
@@ -311,3 +317,51 @@ def test_sze_hinged_roof_displacement_control():
     assert abs(r.rel_error) < 0.01
     assert r.extra["w_limit"] == pytest.approx(r.extra["w_limit_reference"], rel=0.05)
     assert r.extra["w"][-1] == pytest.approx(30.0, abs=1e-9)
+
+
+# Sze et al. 2004 §3.5, the open cylinder pulled out (verification.shells.pullout_cylinder,
+# 12×8 cells, P2B-P2B): the path snaps between 0.50 and 0.525 P_max (Sze's −U_B jumps from 3.653
+# to 4.061). Issue 44: the default first step 0.05 used to give λ 0.108 → 0.514 → 0.671 without
+# ever decreasing. Measured with the limit-point refinement: 16 increments (5 refinements), a
+# maximum λ = 0.5158 and a minimum 0.5117, at λ = 1 W_A +0.17 %, −U_B +0.34 %, −U_C −0.35 %
+# against Sze; 15 s (JIT warm).
+@pytest.mark.slow
+def test_sze_pullout_snap_traced_at_default_settings():
+    from fenics_garment.verification import shells
+
+    with pytest.warns(LimitPointWarning) as caught:
+        r = shells.pullout_cylinder(8)
+    folds = r.extra["limit_points"]
+    path = np.array(r.extra["path"])  # λ, W_A, −U_B, −U_C
+    print(
+        f"W_A {r.value:.4f} ({100 * r.rel_error:+.2f} %), −U_B {r.extra['u_B']:.4f}, −U_C "
+        f"{r.extra['u_C']:.4f}; {r.extra['increments']} increments, {r.extra['refinements']} "
+        f"refinements; limit points {folds}; λ {np.round(path[:, 0], 4).tolist()}"
+    )
+    assert [kind for _, kind, _ in folds] == ["maximum", "minimum"]
+    assert all(resolved and 0.50 <= lam <= 0.525 for lam, _, resolved in folds)
+    assert len([w for w in caught if "limit point" in str(w.message)]) == 2
+    lam, u_b = path[:, 0], path[:, 2]
+    assert np.any(np.diff(lam) < 0)  # the descending part of the snap was traced
+    snap = (lam >= 0.45) & (lam <= 0.6)
+    assert snap.sum() >= 5 and np.max(np.diff(u_b[snap])) < 0.15  # Sze's jump is 0.408
+    assert r.extra["jumps"] == 0 and r.extra["cuts"] == 0
+    # stopped exactly at full load, converged, and on Sze's reference there
+    assert r.extra["load_factor"] == 1.0 and lam[-1] == 1.0
+    assert r.extra["residual"] <= r.extra["residual_tolerance"]
+    assert abs(r.rel_error) < 0.01
+    assert r.extra["u_B"] == pytest.approx(r.extra["u_B_reference"], rel=0.01)
+    assert r.extra["u_C"] == pytest.approx(r.extra["u_C_reference"], rel=0.01)
+
+
+@pytest.mark.slow
+def test_sze_pullout_stops_exactly_at_a_displacement():
+    """``stop_at = (W_A, 2)``: the path ends where the loaded point has moved out by exactly 2
+    (to round-off), converged; Sze's path puts that load between 0.15 P_max (W_A = 1.936) and
+    0.20 P_max (2.079)."""
+    from fenics_garment.verification import shells
+
+    r = shells.pullout_cylinder(8, stop_w_a=2.0)
+    assert abs(r.value - 2.0) <= 1e-12
+    assert r.extra["residual"] <= r.extra["residual_tolerance"]
+    assert 0.15 < r.extra["load_factor"] < 0.20

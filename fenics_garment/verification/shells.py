@@ -586,7 +586,7 @@ PULLOUT_PATH = np.array([
 
 def pullout_cylinder(
     n: int = 8, element: str | None = None, *, initial_load_step: float = 0.05,
-    comm=MPI.COMM_WORLD, **arc_length,
+    stop_w_a: float | None = None, comm=MPI.COMM_WORLD, **arc_length,
 ) -> CaseResult:  # fmt: skip
     """Sze et al. 2004, §3.5: pull-out of an open-ended cylinder (R = 4.953, L = 10.35,
     t = 0.094, E = 10.5e6, ν = 0.3125) by two opposite radial forces P at mid-length; one
@@ -595,7 +595,8 @@ def pullout_cylinder(
 
     The path is followed by :class:`~fenics_garment.path.ArcLength` from the unloaded state
     (first arc that of a tangent step ``initial_load_step``; ``arc_length`` passed to its
-    constructor) and stopped exactly at P = P_max (``stop_at_load = 1``). Its snap between
+    constructor) and stopped exactly at P = P_max (``stop_at_load = 1``), or where W_A =
+    ``stop_w_a`` (``stop_at``) when given. Its snap between
     0.50 and 0.525 P_max (:data:`PULLOUT_PATH`) is a maximum and a minimum of the load close
     together. ``value``: W_A at P_max against 2.768; ``extra``: −U_B, −U_C there and the whole
     path, the limit points found and the path's statistics.
@@ -623,7 +624,11 @@ def pullout_cylinder(
     path = ArcLength(solver, monitor=lambda: -u_b(), **arc_length)
     curve = [(0.0, 0.0, 0.0, 0.0)]
     path.on_step = lambda p: curve.append((p.load_factor, w_a(), -u_b(), -u_c()))
-    path.run(initial_load_step, stop_at_load=1.0)
+    if stop_w_a is None:
+        path.run(initial_load_step, stop_at_load=1.0)
+    else:
+        path.run(initial_load_step, stop_at=(w_a, stop_w_a))
+    residual = solver.residual_norm()
     stats = path.stats
     solver.timings.steps = stats.increments
     solver.timings.newton_iterations = stats.newton_iterations
@@ -631,7 +636,8 @@ def pullout_cylinder(
     return _result(
         "sze-3.5-pullout", model, solver, w_a(), ref[1], t0,
         u_B=-u_b(), u_B_reference=ref[2], u_C=-u_c(), u_C_reference=ref[3],
-        load_factor=float(model.load_factor.value), increments=stats.increments,
+        load_factor=float(model.load_factor.value), residual=residual,
+        residual_tolerance=path.rtol * P_max / 4, increments=stats.increments,
         refinements=stats.refinements, cuts=stats.cuts, jumps=stats.jumps,
         limit_points=[(lp.load_factor, lp.kind, lp.resolved) for lp in stats.limit_points],
         path=[list(map(float, c)) for c in curve],
