@@ -562,8 +562,10 @@ class _PathFollower:
         return self.history
 
     def _report(self, verdict: _Verdict, lam_n: float, refined: int) -> None:
-        """Record and announce a limit point or a jump the accepted increment crossed."""
+        """Record and announce (on rank 0) a limit point or a jump the accepted increment
+        crossed."""
         index = len(self.history) - 1
+        announce = self.x.getComm().tompi4py().rank == 0
         where = (
             f"between λ = {lam_n:.6g} and {self.lam:.6g} (increment {index}, arc {self._step:.3g})"
         )
@@ -572,18 +574,22 @@ class _PathFollower:
             resolved = not verdict.refine
             self.stats.limit_points.append(LimitPoint(lam_star, kind, index, self._step, resolved))
             note = "" if resolved else f", not resolved after {refined} refinements"
-            warnings.warn(
-                f"path following crossed a limit point: λ {kind} ≈ {lam_star:.6g} {where}{note}",
-                LimitPointWarning, stacklevel=4,
-            )  # fmt: skip
+            if announce:
+                warnings.warn(
+                    f"path following crossed a limit point: λ {kind} ≈ {lam_star:.6g} "
+                    f"{where}{note}",
+                    LimitPointWarning, stacklevel=4,
+                )  # fmt: skip
         elif verdict.jump:
             self.stats.jumps += 1
-            warnings.warn(
-                f"path following may have jumped over a snap {where}: the load changed "
-                f"{self.jump_ratio:g}× less than the tangents at both ends predict, and "
-                f"{refined} refinements of the arc did not resolve it; take a smaller first step",
-                LimitPointWarning, stacklevel=4,
-            )  # fmt: skip
+            if announce:
+                warnings.warn(
+                    f"path following may have jumped over a snap {where}: the increment turns "
+                    f"{verdict.turn:.0f}° from the path's tangents or its load changes far less "
+                    f"than they predict, still after {refined} refinements of the arc; take a "
+                    "smaller first step",
+                    LimitPointWarning, stacklevel=4,
+                )  # fmt: skip
 
     # -- landing on a target (stop_at_load, stop_at)
     def _land(
