@@ -40,9 +40,9 @@ R, R0, L, N = 0.1, 0.093, 0.1, (4, 2)
 SLIP = 1e-6  # [m]: κ_T s ≈ 0.05 κ_T µm ≪ μ t_N = μ κ (R_c − r0) ≈ 0.4 κ × 7 mm
 
 
-def _half_stiffness(slip, t_n, mu, kappa_t):
+def _half_stiffness(c: laws.Inputs):
     """A friction law of half the stick stiffness and no Coulomb limit: t_T = −κ_T Δu_T / 2."""
-    return -0.5 * kappa_t * slip
+    return -0.5 * c.kappa_t * c.slip
 
 
 @pytest.fixture(scope="module")
@@ -116,9 +116,9 @@ def test_a_friction_law_changes_residual_and_outputs_together(tube):
         contact.friction = default
 
 
-def _half_coefficient(slip, t_n, mu, kappa_t):
+def _half_coefficient(c: laws.Inputs):
     """The return map with half the friction coefficient."""
-    return laws.coulomb_return_map(slip, t_n, 0.5 * mu, kappa_t)
+    return laws.coulomb_return_map(replace(c, mu=0.5 * c.mu))
 
 
 def test_a_friction_law_changes_the_stick_slip_update(tube):
@@ -153,7 +153,7 @@ def test_a_normal_law_changes_the_multiplier_update(tube):
     st = contact.state
     kappa = float(contact.kappa.value)
     try:
-        contact.normal_law = lambda g, lam, k: laws.macaulay(lam - 2.0 * k * g)
+        contact.normal_law = lambda c: laws.macaulay(c.multiplier - 2.0 * c.kappa * c.gap)
         st.refresh()
         st.lam.x.array[:] = 0.0
         uzawa.update_multiplier(st, kappa)
