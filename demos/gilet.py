@@ -23,7 +23,7 @@
 from dataclasses import replace
 from pathlib import Path
 
-from fenics_garment._stack import MPI
+from fenics_garment.stack import MPI
 from fenics_garment.scene import config
 from fenics_garment.scene.run import run
 

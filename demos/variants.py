@@ -21,7 +21,7 @@
 # ```
 
 # +
-from fenics_garment._stack import MPI  # noqa: I001  (MPI before DOLFINx)
+from fenics_garment.stack import MPI  # noqa: I001  (MPI before DOLFINx)
 
 import math
 import os
@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fenics_garment._stack import ufl
+from fenics_garment.stack import ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.scene import config
 from fenics_garment.scene.run import run
