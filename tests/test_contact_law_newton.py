@@ -46,7 +46,7 @@ def power(c: laws.Inputs) -> ufl.core.expr.Expr:
 
 
 def test_the_hessian_is_where_the_law_in_use_pushes():
-    body = SmoothBody(*icosphere(R, 4))
+    body = SmoothBody(*icosphere(R, 5))  # smoothing radius r = 8 mm
     mesh = parametric_surface_mesh(
         MPI.COMM_SELF,
         lambda a, b: 0.1035 * np.vstack([np.cos(a) * np.cos(b), np.sin(a) * np.cos(b), np.sin(b)]),
@@ -64,10 +64,10 @@ def test_the_hessian_is_where_the_law_in_use_pushes():
         state.refresh()
         hessians[law] = state.hessian.x.array.reshape(-1, 3, 3)[state._dofs].copy()
     gap = state.local_values(state.gap)
-    # open, beyond the reach of the Hessian before (0.1 mm + a quarter of the body's smoothing
-    # radius ≈ 2.3 mm), within the exponential law's
+    # open, beyond the reach of the Hessian before (0.1 mm + r/4 = 2.1 mm), within the
+    # exponential law's
     assert 2.5e-3 < gap.min() and gap.max() < C0
-    assert np.abs(hessians[exponential] - exact).max() < 0.05 / R  # body edges 4 mm: a few %
+    assert np.abs(hessians[exponential] - exact).max() < 0.05 / R  # body edges 2 mm: a few %
     assert np.abs(hessians[laws.augmented_lagrangian]).max() == 0.0
 
 
