@@ -45,14 +45,12 @@ def law_inputs(state: ContactState, kappa: Expr | None = None, *,
         gap, normal, u = state.gap, state.normal_fn, state.u_k
     else:
         gap, normal, u = state.linearised_gap(), state.contact_normal(), state.u
-    du = u - state.u_old
-    n = state.normal_fn  # the slip is tangential to the refreshed normal
     f = state.friction
     warp, weft = state.frame if state.frame is not None else (None, None)
     return laws.Inputs(
         gap=gap, gap_rate=gap - state.gap_old, multiplier=state.lam, kappa=kappa,
         position=ufl.SpatialCoordinate(state.mesh) + u, normal=normal, warp=warp, weft=weft,
-        slip=du - ufl.dot(du, n) * n,
+        slip=slip_increment(state, u),
         mu=f.mu if f is not None else None, kappa_t=f.kappa_t if f is not None else None,
     )  # fmt: skip
 
@@ -79,10 +77,11 @@ def normal_traction(state: ContactState, kappa: Expr) -> Expr:
     return tractions(state, kappa)[0]
 
 
-def slip_increment(state: ContactState) -> Expr:
-    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the anchor u_old (rigid body)."""
+def slip_increment(state: ContactState, u: Expr | None = None) -> Expr:
+    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the anchor u_old (rigid body), n the
+    refreshed normal; u defaults to the state's unknown displacement."""
     n = state.normal_fn
-    du = state.u - state.u_old
+    du = (state.u if u is None else u) - state.u_old
     return du - ufl.dot(du, n) * n
 
 
