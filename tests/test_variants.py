@@ -147,7 +147,7 @@ def test_a_friction_law_changes_the_stick_slip_update(tube):
 
 
 def test_a_normal_law_changes_the_multiplier_update(tube):
-    """Uzawa's λ ← t_N(g, λ, κ) evaluates the normal law in use: with a law of twice the
+    """Uzawa's λ ← t_N(c) evaluates the normal law in use: with a law of twice the
     penalty, t_N = ⟨λ − 2κ g⟩₊, one update from λ = 0 gives λ = 2κ⟨−g⟩₊ (g the refreshed gap)."""
     _, contact = tube
     st = contact.state
