@@ -34,7 +34,10 @@ anchor moves so that the slip left is the one at which the law carries the tract
 now (``ContactState.elastic_slip``, found by evaluating the law). For the Coulomb return map
 that is its elastic slip (a sticking point keeps its anchor and its traction, a slipping one
 stays on the cone); for a law with no elastic range, such as a tanh regularisation, it is the
-law's inverse at the traction, so a sustained load does not creep from step to step.
+law's inverse at the traction, so a sustained load does not creep from step to step. The
+update keeps the slip along the traction's direction: for a law whose traction is not collinear
+with its slip (an anisotropic law, away from its yarn directions) it keeps the traction's
+magnitude, not its direction.
 """
 
 from __future__ import annotations
