@@ -20,10 +20,11 @@
 # key or a negative thickness stops here, naming the file and the key.
 
 # +
+from fenics_garment.stack import MPI  # noqa: I001  (the stack first)
+
 from dataclasses import replace
 from pathlib import Path
 
-from fenics_garment._stack import MPI
 from fenics_garment.scene import config
 from fenics_garment.scene.run import run
 

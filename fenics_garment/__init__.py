@@ -4,7 +4,8 @@ A geometrically nonlinear Reissner–Mindlin (Naghdi) shell for the garment, wri
 small UFL energy terms, in contact with a body surface mesh, solved with PETSc SNES in DOLFINx 0.11.
 
 Importing the package is cheap: the DOLFINx stack is loaded by the submodules that need it
-(through :mod:`fenics_garment._stack`, which gets the import order right).
+(through :mod:`fenics_garment.stack`, which gets the import order right: a script imports
+``from fenics_garment.stack import MPI, dolfinx, ufl`` before anything else of the stack).
 """
 
 from importlib.metadata import PackageNotFoundError, version

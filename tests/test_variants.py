@@ -26,7 +26,7 @@ import numpy as np
 import pytest
 
 from fenics_garment._stack import dolfinx, ufl
-from fenics_garment.contact import laws, uzawa
+from fenics_garment.contact import laws, terms, uzawa
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.primitives import cylinder
@@ -40,9 +40,9 @@ R, R0, L, N = 0.1, 0.093, 0.1, (4, 2)
 SLIP = 1e-6  # [m]: κ_T s ≈ 0.05 κ_T µm ≪ μ t_N = μ κ (R_c − r0) ≈ 0.4 κ × 7 mm
 
 
-def _half_stiffness(slip, t_n, mu, kappa_t):
+def _half_stiffness(c: laws.Inputs):
     """A friction law of half the stick stiffness and no Coulomb limit: t_T = −κ_T Δu_T / 2."""
-    return -0.5 * kappa_t * slip
+    return -0.5 * c.kappa_t * c.slip
 
 
 @pytest.fixture(scope="module")
@@ -116,9 +116,9 @@ def test_a_friction_law_changes_residual_and_outputs_together(tube):
         contact.friction = default
 
 
-def _half_coefficient(slip, t_n, mu, kappa_t):
+def _half_coefficient(c: laws.Inputs):
     """The return map with half the friction coefficient."""
-    return laws.coulomb_return_map(slip, t_n, 0.5 * mu, kappa_t)
+    return laws.coulomb_return_map(replace(c, mu=0.5 * c.mu))
 
 
 def test_a_friction_law_changes_the_stick_slip_update(tube):
@@ -147,13 +147,13 @@ def test_a_friction_law_changes_the_stick_slip_update(tube):
 
 
 def test_a_normal_law_changes_the_multiplier_update(tube):
-    """Uzawa's λ ← t_N(g, λ, κ) evaluates the normal law in use: with a law of twice the
+    """Uzawa's λ ← t_N(c) evaluates the normal law in use: with a law of twice the
     penalty, t_N = ⟨λ − 2κ g⟩₊, one update from λ = 0 gives λ = 2κ⟨−g⟩₊ (g the refreshed gap)."""
     _, contact = tube
     st = contact.state
     kappa = float(contact.kappa.value)
     try:
-        contact.normal_law = lambda g, lam, k: laws.macaulay(lam - 2.0 * k * g)
+        contact.normal_law = lambda c: laws.macaulay(c.multiplier - 2.0 * c.kappa * c.gap)
         st.refresh()
         st.lam.x.array[:] = 0.0
         uzawa.update_multiplier(st, kappa)
@@ -218,3 +218,80 @@ def test_add_energy_expression_and_law(tube):
     finally:
         model.q.x.array[:] = 0.0
         model.q.x.scatter_forward()
+
+
+MU_WARP, MU_WEFT = 0.6, 0.2  # the law's own coefficients (in a closure: the scene's μ unused)
+
+
+def _unit_tangent(d, n):
+    t = d - ufl.dot(d, n) * n
+    return t / ufl.sqrt(ufl.dot(t, t))
+
+
+def _yarn_coulomb(c: laws.Inputs):
+    """Sliding Coulomb friction along each yarn with its own coefficient (no stick range):
+    t_T = −t_N Σ μ_i sign(s_i) a_i, a_i the warp and weft made tangent to the body."""
+    t = 0
+    for mu, d in ((MU_WARP, c.warp), (MU_WEFT, c.weft)):
+        a = _unit_tangent(d, c.normal)
+        t += -mu * c.normal_traction * ufl.sign(ufl.dot(c.slip, a)) * a
+    return t
+
+
+def _torque_z(st) -> float:
+    """∫ (x × t_T)·e_z dA of the friction traction in use (collective)."""
+    x = ufl.SpatialCoordinate(st.mesh) + st.u
+    t_t = terms.tractions(st, st.kappa)[1]
+    form = dolfinx.fem.form((x[0] * t_t[1] - x[1] * t_t[0]) * st.dx)
+    return st.mesh.comm.allreduce(dolfinx.fem.assemble_scalar(form), op=MPI.SUM)
+
+
+def test_a_law_gets_the_warp_and_weft_and_is_switched(tube):
+    """Sliding along the warp (the tube's axis, s e_z) the law carries μ_warp t_N, along the
+    weft (the hoop, s e_θ) μ_weft t_N: a reaction −μ_warp Σ t_N dA along z, a torque
+    −μ_weft Σ t_N r dA about it (t_N = κ(−g) at q = 0, g the refreshed gap per point). With the
+    dressing's switch off (``friction_on`` = 0) the same law carries nothing."""
+    _, contact = tube
+    st = contact.state
+    kappa = float(contact.kappa.value)
+    default = contact.friction
+    try:
+        contact.friction = replace(default, law=_yarn_coulomb)
+        _slip_everywhere(contact, 0.0)
+        x = st.positions()
+        depth = -st.local_values(st.gap)
+        areas = cpressure.point_areas(st, ufl.as_ufl(1.0))
+        comm = st.mesh.comm
+        normal = comm.allreduce(float((kappa * depth * areas).sum()), op=MPI.SUM)
+        r = np.hypot(x[:, 0], x[:, 1])
+        moment = comm.allreduce(float((kappa * depth * r * areas).sum()), op=MPI.SUM)
+        _slip_everywhere(contact, 1e-2)  # along the axis: the warp
+        assert contact.reaction((0.0, 0.0, 1.0)) == pytest.approx(-MU_WARP * normal, rel=1e-9)
+        hoop = np.column_stack([-x[:, 1], x[:, 0], 0 * r]) / r[:, None]
+        st.set_local_values(st.u_old, st.local_values(st.u_k) - 1e-2 * hoop)  # along the weft
+        assert _torque_z(st) == pytest.approx(-MU_WEFT * moment, rel=1e-3)  # n ≈ radial
+        st.friction_on.value = 0.0
+        assert _torque_z(st) == 0.0  # (of the friction traction alone)
+        assert abs(contact.reaction((0.0, 0.0, 1.0))) < 1e-9 * MU_WARP * normal  # t_N n·e_z
+    finally:
+        st.friction_on.value = 1.0
+        contact.friction = default
+
+
+def test_a_soft_law_is_refused_by_the_augmented_lagrangian(tube):
+    """A normal law that ignores the multiplier is not a constraint: Uzawa refuses it in one
+    line before its first solve; the default law (⟨λ − κg⟩₊) is let through."""
+    _, contact = tube
+    st = contact.state
+
+    def never():
+        raise AssertionError("solved")
+
+    try:
+        contact.normal_law = lambda c: 1.0e3 * ufl.exp(-c.gap / 2e-3)
+        with pytest.raises(uzawa.SoftLawError) as err:
+            uzawa.augmented_lagrangian(st, float(contact.kappa.value), never, tol=1e-5)
+        assert "\n" not in str(err.value) and "soft" in str(err.value)
+    finally:
+        contact.normal_law = laws.augmented_lagrangian
+    uzawa.require_constraint(st)

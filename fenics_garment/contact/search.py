@@ -60,7 +60,8 @@ class ClosestPoints:
         normal: unit contact normal (outward, smoothed as chosen), shape (n, 3).
         hessian: the distance's Hessian, shape (n, 3, 3), for a smooth body
             (:class:`fenics_garment.contact.smooth.SmoothBody`); None for the faceted one.
-        hessian_later: a smooth body's Hessian on demand (``closest(defer_hessian=True)``).
+        hessian_later: a smooth body's Hessian on demand (``closest(defer_hessian=True)``),
+            at every point of the search's ``hessian_below`` or at those of a mask passed to it.
     """
 
     distance: F64
@@ -68,7 +69,7 @@ class ClosestPoints:
     face: I64
     normal: F64
     hessian: F64 | None = None
-    hessian_later: Callable[[], F64] | None = None
+    hessian_later: Callable[..., F64] | None = None
 
 
 class SearchSurface:
@@ -255,10 +256,11 @@ class BroadPhase:
         normal: str = "phong",
         hessian_below: float = np.inf,
         defer_hessian: bool = False,
-    ) -> tuple[F64, F64, F64 | Callable[[], F64] | None]:
+    ) -> tuple[F64, F64, F64 | Callable[..., F64] | None]:
         """Signed distance, normal and (smooth body) Hessian of every point of ``x``, searching
         only the candidates; a skipped point keeps its last normal and gets a zero Hessian.
-        With ``defer_hessian`` the Hessian is returned as a function that computes it."""
+        With ``defer_hessian`` the Hessian is returned as a function that computes it (at the
+        points of an optional mask ``where`` over ``x``: :meth:`SmoothBody.closest`)."""
         n = len(x)
         if self._x0 is None or self._x0.shape != x.shape:
             res = body.closest(x, normal, hessian_below=hessian_below, defer_hessian=defer_hessian)
@@ -283,10 +285,12 @@ class BroadPhase:
         if not body.smooth:
             return d, nrm, None
 
-        def hessian() -> F64:
+        def hessian(where: npt.NDArray[np.bool_] | None = None) -> F64:
             hess = np.zeros((n, 3, 3))
-            if res is not None:
-                hess[near] = res.hessian if res.hessian_later is None else res.hessian_later()
+            if res is not None and res.hessian_later is None:
+                hess[near] = res.hessian
+            elif res is not None:
+                hess[near] = res.hessian_later(None if where is None else where[near])
             return hess
 
         return d, nrm, hessian if defer_hessian else hessian()

@@ -40,14 +40,23 @@ def area_stretch(kin) -> ufl.core.expr.Expr:
     return J if kin.rest_area is None else J * kin.rest_area
 
 
+def garment_frame(kin) -> tuple[ufl.core.expr.Expr, ufl.core.expr.Expr]:
+    """(warp, weft): F e₁/|F e₁|, F e₂/|F e₂|, the yarn directions on the deformed garment (e₁
+    the warp, e₂ the weft of the stress-free fabric), inputs of the laws (:class:`laws.Inputs`)."""
+    a, b = kin.F * kin.e1, kin.F * kin.e2
+    return a / ufl.sqrt(ufl.dot(a, a)), b / ufl.sqrt(ufl.dot(b, b))
+
+
 @dataclass
 class ShellContact:
     """Contact of a shell with a body: the state, the penalty and the contact laws.
 
-    The laws are values (:mod:`fenics_garment.contact.laws`): ``normal_law`` (g, λ, κ) -> t_N
-    and ``friction.law`` (Δu_T, t_N, μ, κ_T) -> t_T. Set them before the solver is built
-    (the model's residual is assembled from them then): the residual, the stick/slip anchor
-    update, the multiplier update, the reaction and the pressure outputs all follow.
+    The laws are values (:mod:`fenics_garment.contact.laws`): ``normal_law`` c -> t_N and
+    ``friction.law`` c -> t_T, of the documented inputs c (:class:`laws.Inputs`: the gap and
+    its rate, the multiplier, the slip, μ, the warp and weft, …). Set them before the solver
+    is built (the model's residual is assembled from them then): the residual, the stick/slip
+    anchor update, the multiplier update, the smooth body's active set, the reaction and the
+    pressure outputs all follow.
     """
 
     model: object
@@ -94,7 +103,7 @@ class ShellContact:
 
     def residual(self, v: ufl.core.expr.Expr) -> ufl.Form:
         """R_c(v) of the laws in use (:func:`terms.contact_residual`) on the test field v."""
-        return terms.contact_residual(self.state, v, self.kappa, self.friction)
+        return terms.contact_residual(self.state, v, self.kappa)
 
     @property
     def traction(self) -> ufl.core.expr.Expr:
@@ -165,6 +174,7 @@ def attach(
         kt = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(kappa_t or kappa))
         friction = terms.Friction(dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(mu)), kt)
     state.friction, state.kappa = friction, k  # the point updates evaluate the laws with them
+    state.frame = garment_frame(model.kinematics())
     contact = ShellContact(model, state, k)
     # added as a builder: the residual is made from the laws in use when the solver is built
     model.add_residual(lambda: contact.residual(ufl.split(ufl.TestFunction(model.Q))[0]))

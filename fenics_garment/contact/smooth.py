@@ -181,13 +181,14 @@ def _hessian(q: dict[str, F64], k: npt.NDArray[np.bool_] | None, c: F64, w: F64,
 
 
 def _imls(y: F64, rho: F64, n: F64, s: F64, rows: _Rows, r: float, hessian: npt.NDArray[np.bool_],
-          vertex_terms, w: F64, z: F64) -> tuple[F64, F64, Callable[[], F64], F64]:  # fmt: skip
+          vertex_terms, w: F64, z: F64) -> tuple[F64, F64, Callable[..., F64], F64]:  # fmt: skip
     """f, ∇f, ∇∇f and W = Σw at the points of ``rows`` from the offsets y = x − p to their
     neighbours p, ρ = |y|, w = φ(ρ/r), z = n·y and the neighbours' normals n and shape
     operators S, given as flat (nnz, …) arrays in the order of ``rows``; ∇∇f only at the points
-    where ``hessian`` (zero elsewhere). ``vertex_terms(k)`` gives (Σ w S, Σ w z S²) over the
-    entries k (None: all). ∇∇f is returned as a function that computes it from the quantities
-    f and ∇f were computed from (when called: the Newton residual needs f and ∇f only).
+    where ``hessian`` (zero elsewhere). ``vertex_terms(k, need)`` gives (Σ w S, Σ w z S²) over
+    the entries k (None: all) of the points ``need``. ∇∇f is returned as a function that
+    computes it from the quantities f and ∇f were computed from (when called: the Newton
+    residual needs f and ∇f only), at the points ``where`` if given (default ``hessian``).
 
     Per sample, with z = n·y and σ = S y:  a = z + ½ y·σ − ½ z |σ|²,
     ∇a = n + σ − ½ |σ|² n − z Sσ,  ∇∇a = S − n ⊗ Sσ − Sσ ⊗ n − z S²;
@@ -203,16 +204,18 @@ def _imls(y: F64, rho: F64, n: F64, s: F64, rows: _Rows, r: float, hessian: npt.
     c = q["a"] - f[rows.row]
     grad = rows.sum(gw * c[:, None] + w[:, None] * q["ga"]) / W[:, None]
 
-    def hess() -> F64:
+    def hess(where: npt.NDArray[np.bool_] | None = None) -> F64:
+        need = hessian if where is None else where
         out = np.zeros((rows.m, 3, 3))
-        if hessian.all():  # every point: no subsets to gather (the same sums)
-            out[:] = _hessian(q, None, c, w, rows, r, grad, vertex_terms(None)) / W[:, None, None]
-        elif hessian.any():
-            k = hessian[rows.row]
-            sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[hessian])
-            out[hessian] = (
-                _hessian(q, k, c, w, sub, r, grad[hessian], vertex_terms(k))
-                / W[hessian][:, None, None]
+        if need.all():  # every point: no subsets to gather (the same sums)
+            sums = vertex_terms(None, need)
+            out[:] = _hessian(q, None, c, w, rows, r, grad, sums) / W[:, None, None]
+        elif need.any():
+            k = need[rows.row]
+            sub = _Rows(np.bincount(rows.row[k], minlength=rows.m)[need])
+            out[need] = (
+                _hessian(q, k, c, w, sub, r, grad[need], vertex_terms(k, need))
+                / W[need][:, None, None]
             )
         return out
 
@@ -294,7 +297,7 @@ class SmoothBody(SearchSurface):
 
     def _smooth_distance(
         self, x: F64, hessian: npt.NDArray[np.bool_] | None = None
-    ) -> tuple[F64, F64, Callable[[], F64], F64]:
+    ) -> tuple[F64, F64, Callable[..., F64], F64]:
         """:meth:`smooth_distance` with ∇∇f as a function computing it on demand."""
         m = len(x)
         need = np.ones(m, dtype=bool) if hessian is None else hessian
@@ -309,8 +312,11 @@ class SmoothBody(SearchSurface):
         w = wendland(rho / r)
         z = np.einsum("ki,ki->k", n, y)
 
-        def vertex_terms(k: npt.NDArray[np.bool_] | None) -> tuple[F64, F64]:
-            """(Σ w S, Σ w z S²) per point over the entries k: sparse products, no 3×3 loops."""
+        def vertex_terms(
+            k: npt.NDArray[np.bool_] | None, need: npt.NDArray[np.bool_]
+        ) -> tuple[F64, F64]:
+            """(Σ w S, Σ w z S²) of the points ``need`` over the entries k: sparse products,
+            no 3×3 loops."""
             k = slice(None) if k is None else k
             sub_rows = (np.cumsum(need) - 1)[rows.row[k]]
             shape = (int(need.sum()), len(self.vertices))
@@ -337,12 +343,15 @@ class SmoothBody(SearchSurface):
         Hessian is computed only where f < ``hessian_below`` (the contact-active points: the
         contact terms need it nowhere else; computed with a slack) and is zero elsewhere.
         ``defer_hessian``: ``hessian`` is left None and ``hessian_later()`` computes it (the
-        same values, from the quantities kept from this search).
+        same values, from the quantities kept from this search); ``hessian_later(where)``
+        computes it at the points ``where`` (a mask over ``points``) instead, e.g. where the
+        contact law in use carries traction at the distance this search found
+        (:meth:`fenics_garment.contact.state.ContactState.update_hessian`).
         """
         res = super().closest(points, normal, feature_tol)
         n_points = len(res.distance)
         near = np.flatnonzero(np.abs(res.distance) <= self.band)
-        h: Callable[[], F64] | None = None
+        h: Callable[..., F64] | None = None
         ok = np.zeros(0, dtype=bool)
         if len(near):
             x = np.asarray(points, dtype=np.float64).reshape(-1, 3)[near]
@@ -352,10 +361,10 @@ class SmoothBody(SearchSurface):
             res.distance[near[ok]] = f[ok]
             res.normal[near[ok]] = g[ok]
 
-        def hessian() -> F64:
+        def hessian(where: npt.NDArray[np.bool_] | None = None) -> F64:
             hess = np.zeros((n_points, 3, 3))
             if h is not None:
-                hess[near[ok]] = h()[ok]
+                hess[near[ok]] = h(None if where is None else where[near])[ok]
             return hess
 
         if defer_hessian:

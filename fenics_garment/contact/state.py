@@ -19,17 +19,21 @@ whether the displacement ``u`` is a plain vector Function or ``ufl.split(q)[0]``
   linearised about the current iterate, g ≈ g_k + n_k·(u − u_k) (exact at u = u_k);
 * ``lam``      the augmented-Lagrangian multiplier (normal traction per reference area) [Pa];
 * ``u_old``    the displacement at the last converged load step (friction slip increment);
+* ``gap_old``  the gap at the last converged load step (the laws' gap rate g − g_old);
 * ``hessian``  H_k, the distance's Hessian, for a smooth body only
   (:class:`fenics_garment.contact.smooth.SmoothBody`): the gap is then linearised to second order,
   g ≈ g_k + n_k·δ + ½ δ·H_k δ, and the contact direction is n ≈ n_k + H_k δ, δ = u − u_k, so the
   Jacobian holds the turning of the body normal (consistent: quadratic Newton). On the faceted
   body H_k = 0 almost everywhere and unbounded (1/d) over edges, so it is left out there.
+  It is computed at the points where the normal law in use carries traction at the refreshed
+  gap (:meth:`ContactState.update_hessian`): the Jacobian needs it exactly there, for any law.
 """
 
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
+from dataclasses import dataclass, replace
 
 import basix
 import basix.ufl
@@ -37,20 +41,21 @@ import numpy as np
 import numpy.typing as npt
 
 from fenics_garment._stack import dolfinx, ufl
-from fenics_garment.contact import laws
+from fenics_garment.contact import laws, terms
 from fenics_garment.contact.search import BroadPhase, SearchSurface
 
 F64 = npt.NDArray[np.float64]
 
-#: Points up to this much [m] outside the traction's reach get the smooth body's Hessian too.
-HESSIAN_MARGIN = 1e-4
 #: Passes of the anchor's fixed point (:meth:`ContactState.elastic_slip`) and the traction [Pa]
 #: below which a point carries none (its elastic slip is then 0).
 ANCHOR_ITERATIONS, TRACTION_FLOOR = 6, 1e-12
-#: Points that penetrate deeper than this [m] get no Hessian term: right after a dressing step
-#: (millimetres of new penetration, t_N = κ × depth) its −t_N H, a negative stiffness over convex
-#: parts, made Newton diverge (SNES −9 on 5 of 19 cotton-gilet steps); converged penetrations are
-#: ≤ 0.14 mm with the penalty (README), so every point has it at the end and Newton is quadratic.
+#: Points that penetrate deeper than this [m] beyond their gap at the last converged step (or
+#: beyond g = 0, if that was open) get no Hessian term: right after a dressing step (millimetres
+#: of new penetration, t_N = κ × depth) its −t_N H, a negative stiffness over convex parts, made
+#: Newton diverge (SNES −9 on 5 of 19 cotton-gilet steps); converged penetrations are ≤ 0.14 mm
+#: with the penalty (README), so every point has it at the end and Newton is quadratic. Measured
+#: from the last converged gap, a soft law's own overclosure (an exponential pressure law's
+#: millimetre) is not mistaken for a transient.
 HESSIAN_DEPTH = 1e-3
 
 
@@ -189,6 +194,7 @@ class ContactState:
         self.u_k = dolfinx.fem.Function(self.Qv, name="u_k")
         self.lam = dolfinx.fem.Function(self.Qs, name="multiplier")
         self.u_old = dolfinx.fem.Function(self.Qv, name="u_old")
+        self.gap_old = dolfinx.fem.Function(self.Qs, name="gap_old")
         self.hessian: dolfinx.fem.Function | None = None
         if body.smooth:
             qt = basix.ufl.quadrature_element(
@@ -209,8 +215,13 @@ class ContactState:
         self.timings = SearchTimings()
         self.u_k.x.array[:] = 0.0
         self.friction = None  # terms.Friction: set by contact.shell.attach
+        #: the dressing's friction switch: t_T = friction_on · friction.law(c) (0 while the body
+        #: grows, unless friction_while_growing), so a law is switched however it is written
+        self.friction_on = dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(1.0))
         self.kappa: dolfinx.fem.Constant | None = None  # normal penalty (friction's t_N)
-        self.normal_law: laws.NormalLaw = laws.augmented_lagrangian  # (g, λ, κ) -> t_N
+        self.normal_law: laws.NormalLaw = laws.augmented_lagrangian  # c -> t_N (laws.Inputs)
+        #: (warp, weft) unit directions on the deformed garment (laws.Inputs): set by attach
+        self.frame: tuple[ufl.core.expr.Expr, ufl.core.expr.Expr] | None = None
         self._compiled: dict[tuple, dolfinx.fem.Expression] = {}  # see evaluate()
 
     # -- the pre-residual hook ------------------------------------------------------------------
@@ -233,10 +244,9 @@ class ContactState:
         xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         uq = self._u_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         t1 = time.perf_counter()
-        below = self._active_distance()
-        defer = defer_hessian and self.hessian is not None
+        smooth = self.hessian is not None
         points = xq if self._unique is None else xq[self._unique[0]]
-        d, nrm, hess = self._broad.query(self.body, points, self.normal, below, defer)
+        d, nrm, hess = self._broad.query(self.body, points, self.normal, defer_hessian=smooth)
         searched = len(points)
         if self._unique is not None:
             d, nrm = d[self._unique[1]], nrm[self._unique[1]]
@@ -246,12 +256,11 @@ class ContactState:
         for k in range(3):
             self.normal_fn.x.array[3 * dofs + k] = nrm[:, k]
             self.u_k.x.array[3 * dofs + k] = uq[:, k]
-        deep = self.gap.x.array[dofs] < -HESSIAN_DEPTH  # transient deep points: no Hessian
-        self._pending = (hess, xq, deep) if defer else None
-        if not defer and hess is not None:
-            self._set_hessian(hess, deep)
         for f in (self.gap, self.normal_fn, self.u_k):
             f.x.scatter_forward()
+        self._pending = (hess, xq) if smooth and defer_hessian else None
+        if smooth and not defer_hessian:
+            self._set_hessian(hess)
         tm = self.timings
         tm.eval_s += t1 - t0
         tm.search_s += t2 - t1
@@ -265,39 +274,57 @@ class ContactState:
 
         If the displacement has changed since that refresh, a full refresh at the current
         iterate is made instead, so the Jacobian always gets the Hessian of its own iterate.
+        It is computed at the points :meth:`hessian_points` picks from the law in use.
         """
         if self._pending is None:
             return
-        later, x_at, deep = self._pending
+        later, x_at = self._pending
         t0 = time.perf_counter()
         xq = self._x_expr.eval(self.mesh, self._cells).reshape(-1, 3)
         if not np.array_equal(xq, x_at):
             self.refresh()
             return
-        self._set_hessian(later(), deep)
+        self._set_hessian(later)
         self._pending = None
         self.timings.search_s += time.perf_counter() - t0
 
-    def _set_hessian(self, hess: F64, deep: npt.NDArray[np.bool_]) -> None:
-        """Write the Hessian of the searched points (one per distinct point) into its Function,
-        zero at the points deeper than HESSIAN_DEPTH."""
+    def hessian_points(self) -> npt.NDArray[np.bool_]:
+        """The owned contact points (flat, cells × points) that get the smooth body's Hessian.
+
+        The contact Jacobian at the refreshed iterate is −t_N'(g) (n·δu)(n·w) − t_N (H δu)·w
+        (δ = u − u_k = 0 there): H is needed exactly where the normal law in use carries
+        traction at the refreshed gap, t_N(c) ≠ 0, evaluated from the law — for a law that
+        still pushes at a positive gap (an exponential pressure–overclosure law) as for the
+        penalty. Left out: points more than :data:`HESSIAN_DEPTH` deeper than at the last
+        converged step (transients). Without a penalty (a bare state) the law cannot be
+        evaluated: every point.
+        """
+        g = self.local_values(self.gap)
+        if self.kappa is None and self.friction is None:
+            carries = np.ones(len(g), dtype=bool)
+        else:
+            carries = self.evaluate(self.refreshed_traction()).ravel() != 0.0
+        deep = g < np.minimum(self.local_values(self.gap_old), 0.0) - HESSIAN_DEPTH
+        return carries & ~deep
+
+    def _set_hessian(self, later: Callable[..., F64]) -> None:
+        """Compute the Hessian of the searched points (one per distinct point) at the
+        :meth:`hessian_points` and write it into its Function (zero elsewhere)."""
         assert self.hessian is not None
-        if self._unique is not None:
-            hess = hess[self._unique[1]]
-        hess[deep] = 0.0
+        where = self.hessian_points()
+        if self._unique is not None:  # a searched point needs it if any of its copies does
+            need = np.zeros(len(self._unique[0]), dtype=bool)
+            np.logical_or.at(need, self._unique[1], where)
+            hess = later(need)[self._unique[1]]
+        else:
+            hess = later(where)
+        hess[~where] = 0.0
         dofs = self._dofs
         for k in range(9):
             self.hessian.x.array[9 * dofs + k] = hess[:, k // 3, k % 3]
         self.hessian.x.scatter_forward()
 
     __call__ = refresh
-
-    def _active_distance(self) -> float:
-        """A body distance above which no point carries traction, t_N = ⟨λ − κ g⟩₊ = 0 (plus
-        HESSIAN_MARGIN): a smooth body's Hessian is needed only below it."""
-        lam = float(self.lam.x.array.max(initial=0.0))
-        kappa = float(self.kappa.value) if self.kappa is not None else np.inf
-        return self.offset - float(self.shrink.value) + lam / kappa + HESSIAN_MARGIN
 
     # -- helpers ------------------------------------------------------------------------------
     def linearised_gap(self) -> ufl.core.expr.Expr:
@@ -332,12 +359,15 @@ class ContactState:
         (2.5 mm median on the sleeve, against an elastic slip μ t_N / κ_T ≈ 0.01 mm) turned
         into tangential "slip" (I − n⊗n)(u − u_old) wherever the faceted body's normal turned by
         a fraction of a degree, and Newton cycled between stick and slip.
+
+        The gap becomes g_old (the laws' gap rate g − g_old restarts from here).
         """
         if self.friction is None:
             self.u_old.x.array[:] = self.u_k.x.array
-            return
-        elastic = self.elastic_slip()
-        self.assign(self.u_old, self.u_k - elastic)
+        else:
+            elastic = self.elastic_slip()
+            self.assign(self.u_old, self.u_k - elastic)
+        self.gap_old.x.array[:] = self.gap.x.array
 
     def elastic_slip(self, iterations: int = ANCHOR_ITERATIONS) -> dolfinx.fem.Function:
         """The slip e (a point Function) at which the friction law carries the traction t_T it
@@ -350,15 +380,15 @@ class ContactState:
         contracts by 1 − |e| |law|'/|law| per pass (≈ ⅔ (|t_T|/μ t_N)²), so a sustained load
         keeps its traction across accepted steps instead of creeping.
         """
-        f = self.friction
         target = dolfinx.fem.Function(self.Qv)
         self.assign(target, self.refreshed_friction())
         e = dolfinx.fem.Function(self.Qv)
-        self.assign(e, -target / f.kappa_t)
-        t_n = self.refreshed_traction()
+        self.assign(e, -target / self.friction.kappa_t)
+        c = terms.law_inputs(self, refreshed=True)
+        c = replace(c, normal_traction=self.normal_law(c), slip=e)  # the law at the slip e
         size = ufl.sqrt(ufl.dot(target, target))
         for _ in range(iterations):
-            t = f.law(e, t_n, f.mu, f.kappa_t)
+            t = terms.friction_law_traction(self, c)
             scale = size / ufl.max_value(ufl.sqrt(ufl.dot(t, t)), TRACTION_FLOOR)
             self.assign(e, e * scale)
         return e
@@ -366,10 +396,8 @@ class ContactState:
     # -- the laws at the refreshed points (no linearisation: u = u_k) ---------------------------
     def refreshed_traction(self, kappa: ufl.core.expr.Expr | None = None) -> ufl.core.expr.Expr:
         """t_N of ``self.normal_law`` at u = u_k, where the linearised gap is the refreshed gap
-        g_k: a UFL expression of the point Functions only (for :meth:`evaluate`)."""
-        if kappa is None:
-            kappa = self.kappa if self.kappa is not None else self.friction.kappa_t
-        return self.normal_law(self.gap, self.lam, kappa)
+        g_k (:func:`terms.tractions` with ``refreshed``; for :meth:`evaluate`)."""
+        return terms.tractions(self, kappa, refreshed=True)[0]
 
     def refreshed_slip(self) -> ufl.core.expr.Expr:
         """Δu_T = (I − n_k⊗n_k)(u_k − u_old) at the refreshed points."""
@@ -378,8 +406,7 @@ class ContactState:
 
     def refreshed_friction(self) -> ufl.core.expr.Expr:
         """t_T of ``self.friction.law`` at the refreshed points (the anchor update's traction)."""
-        f = self.friction
-        return f.law(self.refreshed_slip(), self.refreshed_traction(), f.mu, f.kappa_t)
+        return terms.tractions(self, refreshed=True)[1]
 
     # -- public accessors of the contact points ---------------------------------------------------
     @property

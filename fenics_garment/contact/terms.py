@@ -5,61 +5,98 @@ Notation (all at the contact points, per unit *reference* area of the garment):
 
 * g = g_k + n_k·(u − u_k)   the gap linearised about the current iterate (``ContactState``),
 * ⟨a⟩₊ = max(a, 0),
-* t_N = law(g, λ, κ)        the normal contact traction [Pa], default ⟨λ − κ g⟩₊ (penalty: λ = 0),
-* Δu_T = (I − n⊗n)(u − u_old)  the tangential slip increment since the last converged step.
+* t_N = normal_law(c)       the normal contact traction [Pa], default ⟨λ − κ g⟩₊ (penalty: λ = 0),
+* Δu_T = (I − n⊗n)(u − u_old)  the tangential slip increment since the last converged step,
+* t_T = s · friction.law(c) the tangential traction, s the dressing's friction switch (0 or 1).
 
+:func:`tractions` is the one place where the laws are composed: the residual, the outputs and
+the point-wise updates (``ContactState``, ``uzawa``) all take their tractions from it.
 Integrate the returned densities with ``state.dx`` (the contact-point rule).
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
+from typing import TYPE_CHECKING
 
 from fenics_garment._stack import ufl
+from fenics_garment.contact import laws
 from fenics_garment.contact.laws import FrictionLaw, coulomb_return_map
 from fenics_garment.contact.laws import macaulay as macaulay  # re-exported
-from fenics_garment.contact.state import ContactState
+
+if TYPE_CHECKING:
+    from fenics_garment.contact.state import ContactState
+
+Expr = ufl.core.expr.Expr
 
 
-def normal_traction(state: ContactState, kappa: ufl.core.expr.Expr) -> ufl.core.expr.Expr:
+def law_inputs(state: ContactState, kappa: Expr | None = None, *,
+               refreshed: bool = False) -> laws.Inputs:  # fmt: skip
+    """The documented inputs of the laws (:class:`laws.Inputs`) at the state's contact points.
+
+    ``refreshed=False``: linearised about the Newton iterate (the residual: g of
+    :meth:`ContactState.linearised_gap`, the normal with its turning on a smooth body, the slip
+    and position of the unknown u); ``True``: the point values of the last refresh (g_k, n_k,
+    u_k), for the point-wise updates. ``kappa`` defaults to the state's penalty.
+    """
+    if kappa is None:
+        kappa = state.kappa if state.kappa is not None else state.friction.kappa_t
+    if refreshed:
+        gap, normal, u = state.gap, state.normal_fn, state.u_k
+    else:
+        gap, normal, u = state.linearised_gap(), state.contact_normal(), state.u
+    f = state.friction
+    warp, weft = state.frame if state.frame is not None else (None, None)
+    return laws.Inputs(
+        gap=gap, gap_rate=gap - state.gap_old, multiplier=state.lam, kappa=kappa,
+        position=ufl.SpatialCoordinate(state.mesh) + u, normal=normal, warp=warp, weft=weft,
+        slip=slip_increment(state, u),
+        mu=f.mu if f is not None else None, kappa_t=f.kappa_t if f is not None else None,
+    )  # fmt: skip
+
+
+def friction_law_traction(state: ContactState, c: laws.Inputs) -> Expr:
+    """t_T = s · friction.law(c): the friction law switched by ``state.friction_on`` (s)."""
+    return state.friction_on * state.friction.law(c)
+
+
+def tractions(state: ContactState, kappa: Expr | None = None, *,
+              refreshed: bool = False) -> tuple[Expr, Expr | None]:  # fmt: skip
+    """(t_N, t_T) of the laws in use: t_N = normal_law(c), t_T = s · friction.law(c with
+    c.normal_traction = t_N) (None when frictionless), c = :func:`law_inputs`."""
+    c = law_inputs(state, kappa, refreshed=refreshed)
+    t_n = state.normal_law(c)
+    if state.friction is None:
+        return t_n, None
+    return t_n, friction_law_traction(state, replace(c, normal_traction=t_n))
+
+
+def normal_traction(state: ContactState, kappa: Expr) -> Expr:
     """t_N of the state's normal law (``state.normal_law``) at the linearised gap: the traction
     per reference area the residual uses (penalty when λ = 0)."""
-    return state.normal_law(state.linearised_gap(), state.lam, kappa)
+    return tractions(state, kappa)[0]
 
 
-def slip_increment(state: ContactState) -> ufl.core.expr.Expr:
-    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the anchor u_old (rigid body)."""
+def slip_increment(state: ContactState, u: Expr | None = None) -> Expr:
+    """Δu_T = (I − n⊗n)(u − u_old): tangential slip since the anchor u_old (rigid body), n the
+    refreshed normal; u defaults to the state's unknown displacement."""
     n = state.normal_fn
-    du = state.u - state.u_old
+    du = (state.u if u is None else u) - state.u_old
     return du - ufl.dot(du, n) * n
 
 
-def friction_traction(
-    state: ContactState, friction: Friction, t_n: ufl.core.expr.Expr
-) -> ufl.core.expr.Expr:
-    """t_T of ``friction.law`` (default :func:`laws.coulomb_return_map`) at the slip of the
-    iterate, per reference area."""
-    return friction.law(slip_increment(state), t_n, friction.mu, friction.kappa_t)
-
-
-def contact_residual(
-    state: ContactState,
-    v: ufl.core.expr.Expr,
-    kappa: ufl.core.expr.Expr,
-    friction: Friction | None = None,
-) -> ufl.Form:
+def contact_residual(state: ContactState, v: Expr, kappa: Expr) -> ufl.Form:
     """Virtual work of the contact tractions on the test displacement v (residual sign: + internal).
 
     R_c(v) = −∫ t_N n·v dA − ∫ t_T·v dA   (over the reference area, at the contact points)
 
-    with t_N of ``state.normal_law`` and t_T of ``friction.law``. n is
+    with (t_N, t_T) of :func:`tractions` (``state.normal_law``, ``state.friction``). n is
     ``state.contact_normal()``: the refreshed normal, plus its turning H_k δ on a smooth body,
     so that R_c is the variation of the penalty energy of the linearised gap.
     """
-    t_n = normal_traction(state, kappa)
+    t_n, t_t = tractions(state, kappa)
     form = -t_n * ufl.dot(state.contact_normal(), v) * state.dx
-    if friction is not None:
-        t_t = friction_traction(state, friction, t_n)
+    if t_t is not None:
         form += -ufl.dot(t_t, v) * state.dx
     return form
 
@@ -71,12 +108,13 @@ class Friction:
     Attributes:
         mu: friction coefficient (UFL Constant or float), e.g. :data:`MU_SKIN_COTTON`.
         kappa_t: tangential (stick) penalty [Pa/m]; take it equal to the normal penalty.
-        law: the friction law (Δu_T, t_N, μ, κ_T) -> t_T (:mod:`fenics_garment.contact.laws`);
-            the residual, the stick/slip anchor update and the reaction all use it.
+        law: the friction law c -> t_T of the inputs c (:class:`laws.Inputs`: the slip, t_N,
+            μ, κ_T, the warp and weft, …; :mod:`fenics_garment.contact.laws`); the residual,
+            the stick/slip anchor update and the reaction all use it.
     """
 
-    mu: ufl.core.expr.Expr
-    kappa_t: ufl.core.expr.Expr
+    mu: Expr
+    kappa_t: Expr
     law: FrictionLaw = coulomb_return_map
 
 

@@ -1,7 +1,7 @@
 """Augmented-Lagrangian (Uzawa) loop: drive the penetration below a tolerance at a moderate κ.
 
 Each pass solves the nonlinear problem with the multiplier λ fixed (traction
-t_N = ⟨λ − κ g⟩₊, see :func:`fenics_garment.contact.terms.normal_traction`), then updates
+t_N = ⟨λ − κ g⟩₊, see :func:`fenics_garment.contact.terms.tractions`), then updates
 
     λ ← ⟨λ − κ g⟩₊          (at the converged state; λ is a traction per reference area [Pa])
 
@@ -16,6 +16,11 @@ Academic Press 1982, §2.2; Nocedal & Wright, *Numerical Optimization*, 2nd ed. 
 Alg. 17.4). On the cotton gilet
 at 35 mm one free-edge vertex at the armpit wrapped the body's shoulder rim and its penetration
 went 188 → 169 → 74 → 112 → 116 → 114 µm at fixed κ.
+
+The loop applies to a normal law that is a constraint, one whose traction uses the multiplier λ
+(:func:`fenics_garment.contact.laws.uses_multiplier`); a soft law (e.g. an exponential
+pressure–overclosure law) wants a gap of its own, which the loop would try to drive to zero
+update after update: :func:`require_constraint` refuses it before any solve.
 """
 
 from __future__ import annotations
@@ -28,7 +33,26 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from fenics_garment._stack import MPI, dolfinx
+from fenics_garment.contact import laws, terms
 from fenics_garment.contact.state import ContactState
+
+
+class SoftLawError(ValueError):
+    """The augmented Lagrangian was asked for with a normal law that is not a constraint."""
+
+
+def require_constraint(state: ContactState) -> None:
+    """Raise :class:`SoftLawError` (one line) if the state's normal law does not use the
+    multiplier λ: the augmented Lagrangian would drive to g = 0 a gap the law does not want
+    (16 multiplier updates and a failed run, on the tube with an exponential law)."""
+    law = state.normal_law
+    if not laws.uses_multiplier(law, terms.law_inputs(state, refreshed=True)):
+        name = getattr(law, "__qualname__", repr(law))
+        raise SoftLawError(
+            f"the normal law {name} does not use the multiplier (c.multiplier): it is a soft "
+            "law, not a constraint, and the augmented Lagrangian cannot apply to it; use the "
+            'penalty ([physics] contact = "penalty")'
+        )
 
 
 @dataclass
@@ -146,6 +170,7 @@ def augmented_lagrangian(
     failed at 6.5 µm against a 4.6 µm tolerance); after a failed pass at an unchanged κ with the
     plain (not extrapolated) multiplier step.
     """
+    require_constraint(state)
     report = UzawaReport(tolerance=tol)
     previous = None
     last_gap = None  # the gap of the last converged pass

@@ -4,8 +4,9 @@ A checkpoint lives in ``<run folder>/checkpoint/``:
 
 * ``state-<k>.r<rank>.npz`` — each rank's owned-and-ghost values of everything that carries
   history: the shell unknowns ``q``, the regularisation's ``q_prev``, the contact state's
-  multipliers ``lam`` (augmented Lagrangian) and ``u_old`` (friction: the position of the last
-  converged step), and the broad phase's last exact search (``x0``, ``d0``, ``n0``);
+  multipliers ``lam`` (augmented Lagrangian), ``u_old`` (friction: the position of the last
+  converged step) and ``gap_old`` (the gap there: the contact laws' gap rate, and which points
+  are transiently deep), and the broad phase's last exact search (``x0``, ``d0``, ``n0``);
 * ``progress.json`` — the number ``k`` of the latest complete checkpoint, the ranks, a
   fingerprint of the scene, what the state depends on besides it (:func:`depends`: package
   version, terms hooks' sources, input files, meshes), the SHA-256 of every rank file and the
@@ -129,6 +130,10 @@ def mesh_digest(built) -> str:
     return comm.bcast(digest, root=0)
 
 
+#: Arrays a checkpoint written before they were added lacks (zero then).
+OPTIONAL = ("gap_old",)
+
+
 def _arrays(built) -> dict[str, np.ndarray]:
     st = built.contact.state
     arrays = {
@@ -136,6 +141,7 @@ def _arrays(built) -> dict[str, np.ndarray]:
         "q_prev": built.regularisation.q_prev.x.array,
         "lam": st.lam.x.array,
         "u_old": st.u_old.x.array,
+        "gap_old": st.gap_old.x.array,  # the laws' gap rate (a checkpoint without it: zero)
     }
     return arrays | st.search_memory()
 
@@ -371,6 +377,8 @@ def _load_rank_file(
     for name, target in targets.items():
         if name in ("x0", "d0", "n0"):
             continue
+        if name not in saved and name in OPTIONAL:
+            continue
         if name not in saved:
             raise ResumeError(f"{path}: has no {name!r} array{again}")
         a = saved[name]
@@ -410,7 +418,7 @@ def restore(built, run_folder: Path, meta: dict) -> Progress:
         raise ResumeError(message)
     for name, target in targets.items():
         if name not in ("x0", "d0", "n0"):
-            target[:] = saved[name]
+            target[:] = saved[name] if name in saved else 0.0  # (OPTIONAL arrays)
     if "x0" in saved:
         built.contact.state.restore_search_memory({k: saved[k] for k in ("x0", "d0", "n0")})
     return progress

@@ -298,12 +298,15 @@ def dress(
         steps: initial number of equal steps in s.
         margin: s₀ exceeds the deepest initial penetration by this [m].
         first_step: override the first step (as a fraction of s₀), e.g. to force a cut in tests.
-        augmented_lagrangian: (tolerance [m], max updates) for Uzawa at s = 0, or None (penalty).
+        augmented_lagrangian: (tolerance [m], max updates) for Uzawa at s = 0, or None (penalty);
+            a normal law that is not a constraint is refused before any solve
+            (:func:`uzawa.require_constraint`).
         friction_while_growing: keep Coulomb friction on while the body grows (the default:
             friction acts while a garment goes on). Off, friction is switched on at s = 0,
             where the slip since the last step is zero, so it holds the garment where the
             frictionless growth put it: the free-end hoop equilibrium of Laplace's law that the
-            tube and limb scenes verify.
+            tube and limb scenes verify. The switch is ``ContactState.friction_on``, a factor
+            on the friction law's traction: a law is switched however it holds its μ.
         on_checkpoint: called with the :class:`Progress` after every converged solve (the model
             then holds the converged state), e.g. to write a checkpoint.
         resume: continue from this progress; the caller has put the model's arrays back
@@ -325,6 +328,8 @@ def dress(
     comm = model.geometry.mesh.comm
     q = model.q
     mu = built.mu
+    if augmented_lagrangian is not None:
+        uzawa.require_constraint(st)  # a soft normal law: refused before any solve
     f_ref = _force_scale(built, solver)
     atol = _absolute_tolerance(f_ref, solver)  # deterministic: the same on a resume
     # the solves on the way (grow, release with a spring, multiplier passes) stop at the path
@@ -356,8 +361,8 @@ def dress(
     rep.residual_atol = atol
     s0 = rep.shrink0
     grid = s0 / steps if first_step is None else first_step * s0  # the fixed schedule's step
-    if mu is not None and not friction_while_growing and pr.stage == "grow":
-        mu.value = 0.0
+    if not friction_while_growing and pr.stage == "grow":
+        st.friction_on.value = 0.0  # off while the body grows, however the law is written
     cuts = 0
     last = None  # (shrink, state) of the converged grow solve before the current one
     solver.set_atol(path_atol)
@@ -427,16 +432,15 @@ def dress(
         _sew(pr, built, solver, max_cuts, on_step, on_failure, on_checkpoint)
         pr.stage = "grow"
     if pr.stage == "grow":
-        if mu is not None:
-            mu.value = pr.mu  # friction on: the garment sticks where it was put (slip = 0)
+        _friction_on(st, mu, pr.mu)  # the garment sticks where it was put (slip = 0)
         pr.stage = "release"
         pr.c = float(reg.c.value)
         if reg.c0 == 0.0:
             rep.regularisation_effect = 0.0
         else:
             rep.final_regularisation = pr.c
-    elif mu is not None:
-        mu.value = pr.mu
+    else:
+        _friction_on(st, mu, pr.mu)
     if pr.stage == "release":
         kappa = None
         if augmented_lagrangian is not None and release_multipliers:
@@ -525,6 +529,13 @@ def _sew(
                 f"{reason_name(reason)}, after {its} iterations): the pattern is too far from "
                 "the placed garment for its seams to close",
             )  # fmt: skip
+
+
+def _friction_on(st, mu, value: float) -> None:
+    """Friction on (``ContactState.friction_on``), at the scene's coefficient ``value``."""
+    st.friction_on.value = 1.0
+    if mu is not None:
+        mu.value = value
 
 
 def _multipliers(

@@ -406,6 +406,18 @@ def _status(result: RunResult) -> str:
     return "completed" if result.checks_passed else "checks failed"
 
 
+def _check_terms(built: scene_build.Built) -> None:
+    """The edited problem's laws fit the scene's solver, or a one-line SceneError: the
+    augmented Lagrangian needs a normal law that is a constraint (uzawa.require_constraint)."""
+    scene = built.scene
+    if scene.physics.contact != "augmented-lagrangian":
+        return
+    try:
+        uzawa.require_constraint(built.contact.state)
+    except uzawa.SoftLawError as err:
+        raise config.SceneError(scene.source, "physics.contact", str(err)) from None
+
+
 def _run_in(
     state: run_folder.RunFolder,
     scene: config.Scene,
@@ -440,6 +452,7 @@ def _run_in(
             hook(b)
 
     edit(built)
+    _check_terms(built)
     tight = checks.tight_area(built)  # of the pattern, before the dressing moves it
     start, levels = None, []
     if meta is None:

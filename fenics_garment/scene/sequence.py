@@ -226,7 +226,7 @@ def reset(built, kappa: float) -> None:
     """Put ``built`` back to the undressed pattern with the contact penalty ``kappa`` (after a
     settling that failed, before the direct dressing)."""
     st, reg = built.contact.state, built.regularisation
-    for f in (built.model.q, st.lam, st.u_old, st.u_k, reg.q_prev):
+    for f in (built.model.q, st.lam, st.u_old, st.gap_old, st.u_k, reg.q_prev):
         f.x.array[:] = 0.0
         f.x.scatter_forward()
     built.contact.kappa.value = kappa
