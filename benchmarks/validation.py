@@ -33,8 +33,6 @@ import sys
 import time
 from pathlib import Path
 
-import numpy as np
-
 from benchmarks import check_args
 
 RESULTS = Path(__file__).resolve().parent / "results" / "validation.json"
@@ -46,6 +44,7 @@ PARTS = (
     "drape",
     "drape-refine",
     "drape-amplitude",
+    "drape-hysteresis",
     "table",
 )
 #: strip widths [m] of the plate-vs-beam study (L = 1 m, h = 0.01 m, ν = 0.3, Γ = 3)
@@ -59,6 +58,10 @@ DRAPE_REFINE = (("P-m6", 0.006, 0), ("M-F", 0.009, 0))
 #: the imperfection amplitudes [m] of part ``drape-amplitude`` (P-m6, 12 mm, seed 0)
 DRAPE_AMPLITUDES = (3.0e-4, 3.0e-3)
 DRAPE_AMPLITUDE = 1.0e-3
+#: part ``drape-hysteresis``: the three Matsudaira fabrics (the data file's 2HB) at one mesh and
+#: seed, the elastic law beside the hysteretic one (``shell.energy.HystereticBending``)
+DRAPE_HYSTERESIS = tuple((fid, 0.012, 0, law) for fid in ("M-A", "M-B", "M-F")
+                         for law in ("elastic", "hysteresis"))  # fmt: skip
 #: the Laplace tube of the tabulated membrane law: (warp direction, rest radius r0 [m]) on the
 #: rigid cylinder R = 0.1 m: wrapped hoop strain 8.1 % (r0 = 0.093) and 14.2 % (r0 = 0.088)
 TUBE_CASES = (("axial", 0.093), ("hoop", 0.093), ("axial", 0.088))
@@ -197,73 +200,55 @@ def run_tube(say=print) -> list[dict]:
     return runs
 
 
-def drape_picture(r, m, path: Path) -> None:
-    """Top view of the shadow (pedestal black, specimen outline dashed) beside the 3D shape."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    from matplotlib.tri import Triangulation
-
-    pos, tris = r.positions, r.triangles
-    rp, rs = m.pedestal_diameter / 2, m.specimen_diameter / 2
-    fig = plt.figure(figsize=(10, 4.6))
-    ax = fig.add_subplot(1, 2, 1)
-    tri = Triangulation(pos[:, 0], pos[:, 1], tris)
-    ax.tripcolor(tri, facecolors=np.ones(len(tris)), cmap="gray_r", vmin=0, vmax=1.6)
-    ax.add_patch(plt.Circle((0, 0), rp, color="k"))
-    ax.add_patch(plt.Circle((0, 0), rs, fill=False, ls="--", lw=0.8))
-    ax.set_aspect("equal")
-    ax.set_xlim(-rs * 1.05, rs * 1.05)
-    ax.set_ylim(-rs * 1.05, rs * 1.05)
-    ax.set_title(f"{m.id}: shadow, DC {r.dc:.3f} (measured {m.dc_measured:.3f}), "
-                 f"{r.nodes} nodes", fontsize=9)  # fmt: skip
-    ax3 = fig.add_subplot(1, 2, 2, projection="3d")
-    ax3.plot_trisurf(pos[:, 0], pos[:, 1], pos[:, 2], triangles=tris, cmap="viridis", lw=0)
-    ax3.set_box_aspect((1, 1, 0.45))
-    ax3.set_title("3D shape [m]", fontsize=9)
-    fig.tight_layout()
-    fig.savefig(path, dpi=80)
-    plt.close(fig)
-
-
-def run_drape(cases=None, amplitudes=None, section: str = "drape", say=print) -> list[dict]:
-    from fenics_garment import measured
-    from fenics_garment.verification import cusick
+def run_drape(
+    cases=None, amplitudes=None, section: str = "drape", say=print, laws=None
+) -> list[dict]:
+    """Drape runs of ``cases`` (fabric, mesh size, seed), each with its bending law of ``laws``
+    ("elastic" or "hysteresis": the fabric's 2HB, ``HystereticBending``; default elastic)."""
+    from fenics_garment import drape, measured
+    from fenics_garment.shell.energy import HystereticBending
 
     runs: list[dict] = []
     cases = DRAPE_RUNS if cases is None else cases
     amplitudes = [DRAPE_AMPLITUDE] * len(cases) if amplitudes is None else amplitudes
-    for (fid, size, seed), amp in zip(cases, amplitudes, strict=True):
+    laws = ["elastic"] * len(cases) if laws is None else laws
+    for (fid, size, seed), amp, law in zip(cases, amplitudes, laws, strict=True):
         m = measured.by_id(fid)
         t0 = time.perf_counter()
+        bending = HystereticBending(m.twoHB) if law == "hysteresis" else None
         try:
-            r = cusick.drape(measured.to_fabric(m), size=size, seed=seed,
-                             amplitude=amp, specimen_diameter=m.specimen_diameter,
-                             pedestal_diameter=m.pedestal_diameter)  # fmt: skip
+            r = drape.drape(measured.to_fabric(m), size=size, seed=seed,
+                            amplitude=amp, specimen_diameter=m.specimen_diameter,
+                            pedestal_diameter=m.pedestal_diameter, bending=bending)  # fmt: skip
         except RuntimeError as e:
             runs.append({"case": f"drape {fid}", "fabric": fid, "size": size, "seed": seed,
-                         "amplitude": amp, "status": "failed", "error": str(e),
+                         "amplitude": amp, "law": law, "status": "failed", "error": str(e),
                          "wall_s": time.perf_counter() - t0})  # fmt: skip
             _store(section, runs, amplitude=DRAPE_AMPLITUDE)
-            say(f"drape {fid} h = {size} seed {seed}: failed ({e})")
+            say(f"drape {fid} h = {size} seed {seed} {law}: failed ({e})")
             continue
-        picture: Path | None = RESULTS.parent / f"drape-{fid}-{1000 * size:g}mm-seed{seed}.png"
+        tag = "" if law == "elastic" else f"-{law}"
+        name = f"drape-{fid}-{1000 * size:g}mm-seed{seed}{tag}.png"
+        picture: Path | None = RESULTS.parent / name
+        title = (f"{m.id} ({law}): shadow, DC {r.dc:.3f} (measured {m.dc_measured:.3f}), "
+                 f"{r.nodes} nodes")  # fmt: skip
         try:
-            drape_picture(r, m, picture)
+            drape.picture(r, m.pedestal_diameter / 2, m.specimen_diameter / 2, title, picture)
         except ImportError:  # no matplotlib: no picture
             picture = None
         rec = {
             "case": f"drape {fid}", "fabric": fid, "name": m.name, "source": m.source,
-            "size": size, "seed": seed, "amplitude": amp, "dc": r.dc, "dc_measured": m.dc_measured,
+            "size": size, "seed": seed, "amplitude": amp, "law": law,
+            "twoHB": m.twoHB, "dc": r.dc, "dc_measured": m.dc_measured,
             "dc_clo3d": m.dc_clo3d, "dc_error": r.dc - m.dc_measured, "nodes": r.nodes,
             "nodes_measured": m.nodes_measured, "cells": r.cells, "dofs": r.dofs,
             "steps": r.load_steps, "newton_its": r.newton_its, "wall_s": r.wall_s,
+            "edge_strain": r.edge_strain,
             "picture": picture.name if picture is not None else None, "status": "ok",
         }  # fmt: skip
         runs.append(rec)
         _store(section, runs, amplitude=DRAPE_AMPLITUDE)
-        say(f"drape {fid} h = {1000 * size:g} mm seed {seed}: DC {r.dc:.3f} (measured "
+        say(f"drape {fid} h = {1000 * size:g} mm seed {seed} {law}: DC {r.dc:.3f} (measured "
             f"{m.dc_measured:.3f}, CLO3D {m.dc_clo3d}), nodes {r.nodes} (measured "
             f"{m.nodes_measured}), {r.cells} cells, {r.load_steps} steps, {r.newton_its} its, "
             f"{r.wall_s:.0f} s")  # fmt: skip
@@ -423,6 +408,9 @@ def main(argv: list[str] | None = None) -> int:
     if "drape-amplitude" in parts:
         n = len(DRAPE_AMPLITUDES)
         run_drape([("P-m6", 0.012, 0)] * n, DRAPE_AMPLITUDES, section="drape_amplitude")
+    if "drape-hysteresis" in parts:
+        run_drape([c[:3] for c in DRAPE_HYSTERESIS], section="drape_hysteresis",
+                  laws=[c[3] for c in DRAPE_HYSTERESIS])  # fmt: skip
     print(markdown())
     return 0
 
