@@ -73,7 +73,7 @@ class RunResult:
     folder: Path
     summary: dict
     regions: list[dict]
-    report: DressReport
+    report: DressReport | None  # None: a drape scene (no dressing)
     built: object = field(repr=False)
     completed: bool = True
     message: str = ""
@@ -343,6 +343,12 @@ def run(
     output folder cannot be written or the scene cannot be dressed (``scene.preflight``), and
     :class:`~fenics_garment.output.OutputError` when a file cannot be written mid-run.
     """
+    if scene.kind == "drape":  # a Cusick drape test: its own run (scene.drape)
+        from fenics_garment.scene import drape
+
+        if terms is not None or scene.physics.terms:
+            raise preflight.PreflightError("a drape scene takes no terms hook")
+        return drape.run(scene, out_root, quiet=quiet, comm=comm, resume=resume)
     if scene.output.error_bars and record is None:  # two mesh levels (scene.error_bars)
         return error_bars.run_with_error_bars(
             run, scene, out_root, quiet=quiet, comm=comm, resume=resume, first_step=first_step,
