@@ -18,9 +18,12 @@ The checks (``summary.json`` → ``checks``; a failed one is a WARNING and exit 
 
 * ``instrument``: |DC of the undeformed specimen's rasterised shadow − DC of its exact outline
   (the hem polygon's area)| ≤ 0.005: the raster (``[drape] pixel``) resolves the specimen;
-* ``edge_strain``: the largest |ℓ/L − 1| over the mesh's edges ≤ 0.03: a drape folds a nearly
-  inextensible fabric, so a larger stretch is a wrong equilibrium (the fabric's membrane
-  stiffness is ~10⁵ its weight per metre);
+* ``membrane_strain``: the largest principal Green–Lagrange membrane strain of the shell ≤ 0.03:
+  a drape folds a nearly inextensible fabric, so a larger stretch is a wrong equilibrium (the
+  fabric's membrane stiffness is ~10⁵ its weight per metre). ``summary.json`` also gives
+  ``max_chord_strain``, the largest |ℓ/L − 1| of the straight edges between the deformed P2
+  nodes: folds tighter than the mesh shorten those chords (M-F at 12 mm: 0.076), a sign that
+  the mesh does not resolve them;
 * ``dc_range``: how far DC lies outside [0, 1] (0: inside): the shadow lies between the
   pedestal's and the flat specimen's.
 """
@@ -48,7 +51,7 @@ from fenics_garment.scene.preflight import PreflightError
 from fenics_garment.shell.energy import HystereticBending
 
 #: The bound of each check (module doc).
-LIMITS = {"instrument": 0.005, "edge_strain": 0.03, "dc_range": 0.0}
+LIMITS = {"instrument": 0.005, "membrane_strain": 0.03, "dc_range": 0.0}
 #: The data file a drape scene's ``fabric`` names.
 DATA_FILE = "fenics_garment/data/fabrics_measured.toml"
 
@@ -167,7 +170,9 @@ def _run_in(state: run_folder.RunFolder, scene: config.Scene, comm: MPI.Comm):
     except RuntimeError as err:
         completed, message, res = False, str(err), None
     summary = _summary(scene, m, fabric, law, res, completed, message)
-    found = _checks(res) if res is not None else []
+    strain = max_membrane_strain(res) if res is not None else math.nan
+    summary["max_membrane_strain"] = strain
+    found = _checks(res, strain) if res is not None else []
     summary["checks"] = {c.name: c.as_dict() for c in found}
     summary["checks_passed"] = all(c.ok for c in found)
     if res is not None:
@@ -215,14 +220,24 @@ def _plain(v):
     return str(v)
 
 
-def _checks(res: drape.DrapeResult) -> list[checks.Check]:
+def max_membrane_strain(res: drape.DrapeResult) -> float:
+    """The largest principal membrane strain of the final state (collective)."""
+    from fenics_garment.scene.run import _membrane_strain
+
+    f = _membrane_strain(res.model)
+    comm = res.model.geometry.mesh.comm
+    n = f.function_space.dofmap.index_map.size_local
+    return comm.allreduce(float(f.x.array[:n].max(initial=-math.inf)), op=MPI.MAX)
+
+
+def _checks(res: drape.DrapeResult, strain: float) -> list[checks.Check]:
     dc = res.dc
     outside = max(-dc, dc - 1.0, 0.0) if math.isfinite(dc) else math.nan
     return [
         checks.Check("instrument", abs(res.dc_flat - res.dc_flat_exact), LIMITS["instrument"],
                      "|DC of the flat specimen's raster − of its exact outline|"),
-        checks.Check("edge_strain", res.edge_strain, LIMITS["edge_strain"],
-                     "largest |stretch − 1| of a mesh edge"),
+        checks.Check("membrane_strain", strain, LIMITS["membrane_strain"],
+                     "largest principal membrane strain"),
         checks.Check("dc_range", outside, LIMITS["dc_range"], "distance of DC outside [0, 1]"),
     ]  # fmt: skip
 
@@ -260,7 +275,7 @@ def _summary(scene, m: measured.MeasuredFabric, fabric: Fabric, law, res, comple
             "dc": res.dc, "dc_error": res.dc - m.dc_measured if known else None,
             "nodes": res.nodes, "shadow_area_m2": res.shadow_area,
             "dc_flat_raster": res.dc_flat, "dc_flat_exact": res.dc_flat_exact,
-            "max_edge_strain": res.edge_strain, "cells": res.cells, "dofs": res.dofs,
+            "max_chord_strain": res.edge_strain, "cells": res.cells, "dofs": res.dofs,
             "load_steps": res.load_steps, "newton_iterations": res.newton_its,
             "drape_s": res.wall_s,
         }  # fmt: skip
