@@ -85,12 +85,12 @@ class RunResult:
         return all(c.ok for c in self.checks)
 
 
-def _membrane_strain(model) -> dolfinx.fem.Function:
-    """Largest principal Green–Lagrange membrane strain, interpolated into P1."""
+def _membrane_strain(model, V1: dolfinx.fem.FunctionSpace | None = None) -> dolfinx.fem.Function:
+    """Largest principal Green–Lagrange membrane strain, interpolated into P1 (or ``V1``)."""
     eps = model.kinematics().membrane
     a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
     e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
-    V1 = dolfinx.fem.functionspace(model.geometry.mesh, ("Lagrange", 1))
+    V1 = V1 or dolfinx.fem.functionspace(model.geometry.mesh, ("Lagrange", 1))
     f = dolfinx.fem.Function(V1, name="membrane_strain_max")
     f.interpolate(dolfinx.fem.Expression(e_max, V1.element.interpolation_points))
     return f
