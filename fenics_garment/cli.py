@@ -228,6 +228,13 @@ def _check(scene) -> int:
     from fenics_garment.scene import build, preflight
 
     comm = MPI.COMM_WORLD
+    if scene.kind == "drape":
+        from fenics_garment.scene import drape
+
+        line = drape.check(scene, comm)
+        if comm.rank == 0:
+            print(line)
+        return 0
     preflight.scene_limits(scene)
     if scene.garment.kind == "pattern" and comm.rank == 0:
         from fenics_garment.pattern.io import describe, read_pattern

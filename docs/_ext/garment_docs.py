@@ -228,8 +228,18 @@ def scene_reference_tables() -> list[tuple[str, str, list[str], list[list]]]:
     source = Path(config.__file__).read_text()
     tree = ast.parse(source)
     comments = _field_comments(source, tree)
-    check = next(n for n in tree.body if isinstance(n, ast.FunctionDef) and n.name == "_check")
-    val = _Validators(config, check)
+    # the validator and the checks of the scene kinds' own sections (``_check_drape``)
+    checkers = [n for n in tree.body if isinstance(n, ast.FunctionDef)
+                and (n.name == "_check" or n.name.startswith("_check_"))
+                and n.name not in ("_check_ranges",)]  # fmt: skip
+    val = _Validators(config, checkers[0])
+    for extra in checkers[1:]:
+        more = _Validators(config, extra)
+        val.values.update(more.values)
+        for key, conds in more.conditions.items():
+            val.conditions.setdefault(key, []).extend(conds)
+        for key, names in more.subkeys.items():
+            val.subkeys.setdefault(key, []).extend(names)
     hints = typing.get_type_hints(config.Scene)
     sections = [("", config.Scene)]
     for f in fields(config.Scene):

@@ -264,7 +264,52 @@ class OutputConfig:
 
 
 @dataclass(frozen=True)
+class DrapeConfig:
+    """A Cusick drape test (``kind = "drape"``, :mod:`fenics_garment.scene.drape`): a circular
+    specimen held between the drapemeter's discs (the pedestal) hangs under its own weight; the
+    run reports the drape coefficient DC from the shadow's area as the instrument computes it,
+    and the node count.
+
+    The fabric is one of three: ``fabric``, a fabric of the package's data file
+    ``fenics_garment/data/fabrics_measured.toml`` by id (its measured DC and node count are then
+    compared); ``[drape.kes]``, KES-FB values (``B_gf_cm2_per_cm``, ``W_mg_cm2``, ``T_mm``;
+    optional ``twoHB_gf_cm_per_cm``, ``B_weft_gf_cm2_per_cm``, ``twoHB_weft_gf_cm_per_cm``); or
+    ``[drape.clo3d]``, CLO3D-style converted values (``areal_mass_g_m2``, ``thickness_mm``,
+    ``stretch_warp_g_s2``, ``stretch_weft_g_s2``, ``shear_g_s2``, ``bending_warp_g_mm2_s2``,
+    ``bending_weft_g_mm2_s2``; optional ``twoHB_gf_cm_per_cm``) — the keys and units of the data
+    file, converted to SI by one function (:func:`fenics_garment.measured.material_si`). KES
+    values carry no tensile or shear data: the membrane gets the data file's stated rule
+    (:data:`fenics_garment.measured.MISSING_MEMBRANE_RULE`).
+    """
+
+    #: id of a fabric of the data file (e.g. "P-m6", "M-B"); "" = the values of [drape.kes] or
+    #: [drape.clo3d]
+    fabric: str = ""
+    kes: dict[str, float] = field(default_factory=dict)  # KES-FB values, units in the keys
+    clo3d: dict[str, float] = field(default_factory=dict)  # CLO3D-style values, units in keys
+    #: a measured DC to compare with (0: none; a data-file fabric brings its own)
+    dc_measured: float = 0.0
+    nodes_measured: int = 0  # a measured node count to compare with (0: none)
+    specimen_diameter: float = 0.30  # [m] (BS 5058: 300 mm)
+    pedestal_diameter: float = 0.18  # [m] (BS 5058: 180 mm)
+    mesh_size: float = 0.012  # [m] triangle size of the specimen (order-2 mesh)
+    #: amplitude [m] of the stress-free waviness that seeds the folds (drape.imperfection)
+    imperfection: float = 0.001
+    seed: int = 0  # the random phases of the waviness's modes 2–12
+    #: "elastic", or "hysteresis": the KES 2HB friction moment (shell.energy.HystereticBending;
+    #: needs 2HB)
+    bending: str = "elastic"
+    #: the hysteresis slider's elastic range κ_y [1/m] (shell.energy.YIELD_CURVATURE)
+    yield_curvature: float = 5.0
+    load_steps: int = 20  # equal steps of the self weight before the pseudo-time relaxation
+    pixel: float = 0.0005  # [m] side of the shadow raster's pixels
+
+
+@dataclass(frozen=True)
 class Scene:
+    #: "garment" (a garment dressed on a body: [body], [garment], [physics], [dressing]) or
+    #: "drape" (a Cusick drape test: [drape])
+    kind: str = "garment"
     name: str = "scene"
     body: BodyConfig = field(default_factory=BodyConfig)
     garment: GarmentConfig = field(default_factory=GarmentConfig)
@@ -272,7 +317,14 @@ class Scene:
     dressing: DressingConfig = field(default_factory=DressingConfig)
     solver: SolverConfig = field(default_factory=SolverConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    drape: DrapeConfig = field(default_factory=DrapeConfig)
     source: str = field(default="", compare=False)  # the file it came from (not a TOML key)
+
+
+SCENE_KINDS = ("garment", "drape")
+#: The sections of each scene kind (the others must not be given); solver and output are both's.
+KIND_SECTIONS = {"garment": ("body", "garment", "physics", "dressing"), "drape": ("drape",)}
+DRAPE_BENDING = ("elastic", "hysteresis")
 
 
 BODY_KINDS = ("mannequin", "scan", "cylinder", "arm")
@@ -516,7 +568,13 @@ def _check(s: Scene) -> None:
 
     src = s.source
     b, g, p, d = s.body, s.garment, s.physics, s.dressing
-    _one_of(b.kind, BODY_KINDS, src, "body.kind")
+    _one_of(s.kind, SCENE_KINDS, src, "kind")
+    for other in (k for k in KIND_SECTIONS if k != s.kind):
+        for sec in KIND_SECTIONS[other]:
+            _require(getattr(s, sec) == type(getattr(s, sec))(), src, sec,
+                     f"is a section of a {other} scene, not of a {s.kind}")  # fmt: skip
+    if s.kind == "drape":
+        _check_drape(s)
     if b.kind == "mannequin":
         _one_of(b.size, SIZE_CODES, src, "body.size")
         known = [f.name for f in fields(Measurements)]
@@ -656,6 +714,58 @@ def _check(s: Scene) -> None:
     _check_ranges(s)
 
 
+def _check_drape(s: Scene) -> None:
+    """The checks of ``[drape]`` (a fabric given once and valid, sizes in range)."""
+    from fenics_garment import measured
+
+    src, r = s.source, s.drape
+    given = [k for k, v in (("fabric", r.fabric), ("kes", r.kes), ("clo3d", r.clo3d)) if v]
+    _require(len(given) == 1, src, "drape.fabric",
+             "give the fabric once: a fabric of the data file by id, or [drape.kes], or "
+             f"[drape.clo3d] (got {' and '.join(given) or 'none'})")  # fmt: skip
+    if r.fabric:
+        _one_of(r.fabric, tuple(f.id for f in measured.fabrics()), src, "drape.fabric")
+    for key, table, known in (("drape.kes", r.kes, measured.KES_KEYS + measured.KES_OPTIONAL),
+                              ("drape.clo3d", r.clo3d,
+                               measured.CLO3D_KEYS + measured.CLO3D_OPTIONAL)):  # fmt: skip
+        for k in table:
+            if k not in known:
+                raise _unknown(k, list(known), key, src)
+        if table:
+            try:
+                measured.material_si(table)
+            except ValueError as err:
+                raise SceneError(src, key, str(err)) from None
+    _one_of(r.bending, DRAPE_BENDING, src, "drape.bending")
+    if r.bending == "hysteresis":
+        has_hb = (measured.by_id(r.fabric).twoHB is not None if r.fabric
+                  else "twoHB_gf_cm_per_cm" in (r.kes or r.clo3d))  # fmt: skip
+        _require(has_hb, src, "drape.bending",
+                 "hysteresis needs the fabric's 2HB (twoHB_gf_cm_per_cm); this fabric has "
+                 "none")  # fmt: skip
+    _require(0 < r.pedestal_diameter < r.specimen_diameter <= 1.0, src,
+             "drape.specimen_diameter", "must be larger than pedestal_diameter > 0, at most "
+             f"1 m; got {r.specimen_diameter:g} and {r.pedestal_diameter:g} m")  # fmt: skip
+    overhang = 0.5 * (r.specimen_diameter - r.pedestal_diameter)
+    _require(0 < r.mesh_size <= 0.5 * overhang, src, "drape.mesh_size",
+             f"must be positive, at most half the overhang ({0.5 * overhang:g} m): two cells "
+             f"across the hanging annulus; got {r.mesh_size:g}")  # fmt: skip
+    _require(0 <= r.imperfection <= 0.1 * overhang, src, "drape.imperfection",
+             f"is the seeding waviness's amplitude in [0, {0.1 * overhang:g}] m (a tenth of the "
+             f"overhang), got {r.imperfection:g}")  # fmt: skip
+    _require(r.seed >= 0, src, "drape.seed", f"must be >= 0, got {r.seed}")
+    _require(0 <= r.dc_measured <= 1, src, "drape.dc_measured",
+             f"is a drape coefficient in [0, 1] (0: none), got {r.dc_measured:g}")  # fmt: skip
+    _require(r.nodes_measured >= 0, src, "drape.nodes_measured", "must be >= 0 (0: none)")
+    _require(r.yield_curvature > 0, src, "drape.yield_curvature", "must be positive [1/m]")
+    _require(1 <= r.load_steps <= 1000, src, "drape.load_steps",
+             f"must be in [1, 1000], got {r.load_steps}")  # fmt: skip
+    _require(1e-5 <= r.pixel <= 0.05 * r.pedestal_diameter, src, "drape.pixel",
+             f"must be in [1e-05, {0.05 * r.pedestal_diameter:g}] m, got {r.pixel:g}")  # fmt: skip
+    _require(not s.output.error_bars, src, "output.error_bars",
+             "a drape has no error bars (run it on two meshes: drape.mesh_size)")  # fmt: skip
+
+
 def _no_control_characters(s: Scene) -> None:
     """SceneError for a control character in any string of the scene (a folder, a file name, a
     fabric): it would end up in paths and in the run's own ``scene_used.toml``."""
@@ -740,9 +850,14 @@ def _parse(path: Path, where: str) -> dict:
 
 
 def to_dict(scene: Scene) -> dict:
-    """The scene as a TOML-ready table (every key, defaults included)."""
+    """The scene as a TOML-ready table (every key of its kind's sections, defaults included)."""
     d = asdict(scene)
     d.pop("source")
+    for other in (k for k in KIND_SECTIONS if k != scene.kind):
+        for sec in KIND_SECTIONS[other]:
+            d.pop(sec)
+    if scene.kind == "garment":  # the default kind is not written: the text of a garment scene
+        d.pop("kind")  # (and its checkpoints' fingerprint) is as before drape scenes existed
     return d
 
 
@@ -769,6 +884,7 @@ def dumps(scene: Scene) -> str:
     d = to_dict(scene)
     source = bounded.cut(repr(scene.source)[1:-1], 300) if scene.source else "-"
     lines = [f"# scene used for this run (defaults filled in); from {source}",
+             *([f"kind = {_toml_value(d.pop('kind'))}"] if "kind" in d else []),
              f"name = {_toml_value(d.pop('name'))}"]  # fmt: skip
     for section, table in d.items():
         lines += ["", f"[{section}]"]

@@ -34,8 +34,8 @@ LOCK = ".lock"
 #: What a run writes into its folder (a fresh run removes these, nothing else).
 OUTPUT_FILES = ("summary.json", "pressure_regions.csv", "final_state.xdmf", "body_pressure.vtu",
                 "pressure_garment.png", "pressure_body.png", "scene_used.toml", "report.html",
-                "report_surfaces.npz", STATE)  # fmt: skip
-OUTPUT_DIRS = ("dressing.bp", "checkpoint")
+                "report_surfaces.npz", "drape.png", STATE)  # fmt: skip
+OUTPUT_DIRS = ("dressing.bp", "drape.bp", "checkpoint")
 NESTED = "coarse_level"  # the error bars' coarse run, a run folder of its own
 
 

@@ -73,7 +73,7 @@ class RunResult:
     folder: Path
     summary: dict
     regions: list[dict]
-    report: DressReport
+    report: DressReport | None  # None: a drape scene (no dressing)
     built: object = field(repr=False)
     completed: bool = True
     message: str = ""
@@ -85,12 +85,12 @@ class RunResult:
         return all(c.ok for c in self.checks)
 
 
-def _membrane_strain(model) -> dolfinx.fem.Function:
-    """Largest principal Green–Lagrange membrane strain, interpolated into P1."""
+def _membrane_strain(model, V1: dolfinx.fem.FunctionSpace | None = None) -> dolfinx.fem.Function:
+    """Largest principal Green–Lagrange membrane strain, interpolated into P1 (or ``V1``)."""
     eps = model.kinematics().membrane
     a, b, d = eps[0, 0], eps[0, 1], eps[1, 1]
     e_max = 0.5 * (a + d) + ufl.sqrt(0.25 * (a - d) ** 2 + b**2)
-    V1 = dolfinx.fem.functionspace(model.geometry.mesh, ("Lagrange", 1))
+    V1 = V1 or dolfinx.fem.functionspace(model.geometry.mesh, ("Lagrange", 1))
     f = dolfinx.fem.Function(V1, name="membrane_strain_max")
     f.interpolate(dolfinx.fem.Expression(e_max, V1.element.interpolation_points))
     return f
@@ -343,6 +343,12 @@ def run(
     output folder cannot be written or the scene cannot be dressed (``scene.preflight``), and
     :class:`~fenics_garment.output.OutputError` when a file cannot be written mid-run.
     """
+    if scene.kind == "drape":  # a Cusick drape test: its own run (scene.drape)
+        from fenics_garment.scene import drape
+
+        if terms is not None or scene.physics.terms:
+            raise preflight.PreflightError("a drape scene takes no terms hook")
+        return drape.run(scene, out_root, quiet=quiet, comm=comm, resume=resume)
     if scene.output.error_bars and record is None:  # two mesh levels (scene.error_bars)
         return error_bars.run_with_error_bars(
             run, scene, out_root, quiet=quiet, comm=comm, resume=resume, first_step=first_step,

@@ -184,3 +184,149 @@ def cell_size(mesh) -> dolfinx.fem.Function:
     h = dolfinx.fem.Function(dolfinx.fem.functionspace(mesh, ("DG", 0)), name="cell_size")
     h.x.array[:n] = diam
     return h
+
+
+#: The slider's elastic range κ_y [1/m] of :class:`HystereticBending` unless given: 0.05 cm⁻¹,
+#: a tenth of the smallest curvature at which KES-FB2 reads 2HB (0.5 cm⁻¹, Kawabata, The
+#: standardization and analysis of hand evaluation, 2nd ed., Textile Machinery Society of Japan
+#: 1980) — our choice, stated: the slider is rigid to within it.
+YIELD_CURVATURE = 5.0
+
+
+class HystereticBending:
+    r"""A bending law with hysteresis (KES-FB2 2HB), replacing :func:`bending_energy`:
+    ``ShellModel(..., bending=HystereticBending(twoHB))`` or ``model.bending = law``.
+
+    Each of the warp and weft bending moments is the elastic one plus a Coulomb-like friction
+    moment m_α, |m_α| ≤ HB_α = 2HB_α/2, that opposes the change of curvature: a friction slider
+    (a Jenkins element: a stiff spring k_α = HB_α/κ_y in series with a Coulomb slider of
+    threshold HB_α) in parallel with the elastic law,
+
+    .. math::
+        M_{αα} = \partial\psi_{\rm el}/\partial\kappa_{αα} + m_α, \qquad
+        m_α = k_α(\kappa_{αα} - \kappa^p_α), \quad |m_α| \le HB_α .
+
+    Under pure bending beyond κ_y the moment–curvature loop is the KES loop: M = Bκ ± HB, its
+    width 2HB at every curvature. The history is the slip κᵖ_α at the quadrature points of the
+    bending integral. Within a step the law is the implicit-Euler incremental potential of the
+    slider from the last accepted slip κᵖₙ (a Huber function of e = κ − κᵖₙ: ½k e² for
+    k|e| ≤ HB, else HB|e| − HB²/2k; convex and C¹, so the Jacobian stays symmetric and
+    positive); :meth:`commit` accepts a converged step (return mapping: κᵖ = κ − clip(k e,
+    ±HB)/k). A solver path that never commits keeps κᵖ = 0: a nonlinear elastic law, not a
+    hysteresis (the drape's path, :func:`fenics_garment.drape.relax`, commits every accepted
+    step). Twisting (κ₁₂) stays elastic: the KES measures no twisting hysteresis.
+
+    ``degree``: the quadrature degree of the bending integral (the element's full degree, 4 for
+    the P2 elements; a mismatch is refused by the form compiler). ``elastic``: the elastic law
+    it adds to (default :func:`bending_energy`).
+    """
+
+    def __init__(
+        self,
+        twoHB_warp: float,
+        twoHB_weft: float | None = None,
+        *,
+        yield_curvature: float = YIELD_CURVATURE,
+        degree: int = 4,
+        elastic: Callable[[ShellKinematics, StiffnessConstants], ufl.core.expr.Expr] = (
+            bending_energy
+        ),
+    ) -> None:
+        weft = twoHB_warp if twoHB_weft is None else twoHB_weft
+        for name, v in (("2HB warp", twoHB_warp), ("2HB weft", weft),
+                        ("yield curvature", yield_curvature)):  # fmt: skip
+            if not (np.isfinite(v) and v > 0):
+                raise ValueError(f"hysteretic bending: {name} must be positive, got {v!r}")
+        self.twoHB = (float(twoHB_warp), float(weft))
+        self.yield_curvature = float(yield_curvature)
+        self.degree = degree
+        self.elastic = elastic
+        self.__name__ = self.__qualname__ = (
+            f"hysteretic_bending[2HB {self.twoHB[0]:.4g}/{self.twoHB[1]:.4g} N·m/m, "
+            f"κ_y {self.yield_curvature:g}/m]"
+        )
+        self._slip: dolfinx.fem.Function | None = None
+        self._update: tuple | None = None  # (Expression, scratch Function)
+        self._consts: tuple | None = None
+
+    @property
+    def slip(self) -> dolfinx.fem.Function | None:
+        """κᵖ (warp, weft) [1/m] at the quadrature points (None before the law is used)."""
+        return self._slip
+
+    def _state(self, mesh) -> None:
+        import basix.ufl
+
+        if self._slip is not None and self._slip.function_space.mesh is mesh:
+            return
+        Qe = basix.ufl.quadrature_element(mesh.basix_cell(), value_shape=(2,),
+                                          degree=self.degree)  # fmt: skip
+        V = dolfinx.fem.functionspace(mesh, Qe)
+        self._slip = dolfinx.fem.Function(V, name="bending_slip")
+        hb = [0.5 * t for t in self.twoHB]
+
+        def c(v: float) -> dolfinx.fem.Constant:
+            return dolfinx.fem.Constant(mesh, dolfinx.default_scalar_type(v))
+
+        self._consts = tuple((c(h), c(h / self.yield_curvature)) for h in hb)
+        self._update = None
+
+    def friction_moments(self, kin: ShellKinematics) -> list[ufl.core.expr.Expr]:
+        """m_α = clip(k_α (κ_αα − κᵖ_α), ±HB_α) [N·m/m] of the current step (warp, weft)."""
+        out = []
+        for a, (hb, k) in enumerate(self._consts):
+            m = k * (kin.bending[a, a] - self._slip[a])
+            out.append(ufl.max_value(ufl.min_value(m, hb), -hb))
+        return out
+
+    def __call__(self, kin: ShellKinematics, C: StiffnessConstants) -> ufl.core.expr.Expr:
+        self._state(_mesh_of(kin.bending))
+        psi = self.elastic(kin, C)
+        for a, (hb, k) in enumerate(self._consts):
+            e = kin.bending[a, a] - self._slip[a]
+            inside = 0.5 * k * e**2
+            outside = hb * abs(e) - hb**2 / (2 * k)
+            psi += ufl.conditional(ufl.le(k * abs(e), hb), inside, outside)
+        self._kin = kin
+        return psi
+
+    def commit(self) -> None:
+        """Accept the current (converged) state: κᵖ ← κ − m/k (the slip the step made)."""
+        if self._slip is None:
+            return
+        if self._update is None:
+            kin = self._kin
+            m = self.friction_moments(kin)
+            slip = ufl.as_vector([kin.bending[a, a] - m[a] / self._consts[a][1]
+                                  for a in range(2)])  # fmt: skip
+            V = self._slip.function_space
+            self._update = (dolfinx.fem.Expression(slip, V.element.interpolation_points),
+                            dolfinx.fem.Function(V))  # fmt: skip
+        expr, scratch = self._update
+        scratch.interpolate(expr)
+        self._slip.x.array[:] = scratch.x.array
+        self._slip.x.scatter_forward()
+
+    def reset(self) -> None:
+        """Forget the history (κᵖ = 0)."""
+        if self._slip is not None:
+            self._slip.x.array[:] = 0.0
+
+
+def _mesh_of(expr: ufl.core.expr.Expr):
+    """The DOLFINx mesh of the first Function in ``expr`` (the shell's unknown)."""
+    from ufl.algorithms import extract_coefficients
+
+    for c in extract_coefficients(expr):
+        if isinstance(c, dolfinx.fem.Function):
+            return c.function_space.mesh
+    raise ValueError("the expression holds no Function: no mesh to put the history on")
+
+
+def commit_history(model) -> None:
+    """Accept a converged step in every law of ``model`` that has a history (a ``commit``
+    method, e.g. :class:`HystereticBending`): call after each accepted step of a path."""
+    for law in (model.membrane, model.bending, model.shear, model.drilling):
+        commit = getattr(law, "commit", None)
+        if commit is not None:
+            commit()

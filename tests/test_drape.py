@@ -7,7 +7,7 @@ import math
 import numpy as np
 import pytest
 
-from fenics_garment.verification import cusick
+from fenics_garment import drape as cusick
 
 
 def test_shadow_area_is_the_union():
