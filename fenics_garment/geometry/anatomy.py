@@ -64,6 +64,14 @@ HEAD_FLARE = 1.25
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
+#: The knee (the middle of the kneecap) is where, going up from the narrowing under it, the leg's
+#: tape girth has grown by this share: calibrated on MakeHuman's knee measuring loop
+#: (``benchmarks/landmarks.py``: 3.4–6 % above the narrowing on its woman, man and heavy man).
+KNEE_RISE = 0.05
+#: :func:`extreme`: a girth within this share of the narrowest (widest) ...
+PLATEAU = 0.005
+#: ... over more than this height [m] has no apparent extreme: the middle of it is taken
+PLATEAU_SPAN = 0.03
 #: Depth [fraction of the stature] by which the front must recede below the bust's most forward
 #: point, and come forward again below the inframammary fold, for either to count: 0.2 %, 3.3 mm
 #: on a 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and
@@ -402,7 +410,11 @@ def torso_levels(
         under = fold_level(outline, bust, half_gap, max(narrowest, bust - FOLD_REACH * H), H)
     if under is None:
         under = bust - FLAT_UNDERBUST * (bust - narrowest)
-    waist = arg(np.argmin, crotch + 0.25 * span, min(crotch + 0.75 * span, under - 0.01 * H))
+    lo, hi = crotch + 0.25 * span, min(crotch + 0.75 * span, under - 0.01 * H)
+    sel = (zs >= lo) & (zs <= hi)
+    if not sel.any():
+        raise ScanError(f"no torso section between {lo:.3f} and {hi:.3f} m")
+    waist = extreme(zs[sel], g[sel], widest=False)
     hip = arg(np.argmax, crotch + 0.03 * H, waist - 0.02 * H)  # not the span across the thighs
     return {
         "hip": hip,
@@ -480,20 +492,40 @@ def fold_level(outline, bust: float, half_gap: float, lo: float, H: float) -> fl
     return None
 
 
+def extreme(zs: Array, g: Array, widest: bool) -> float:
+    """The height of the narrowest (``widest``: the widest) girth ``g`` over the heights ``zs``;
+    where the girth stays within :data:`PLATEAU` of that extreme over more than
+    :data:`PLATEAU_SPAN` of height (no apparent narrowing or bulge: a heavy body's waist, a
+    long even calf), the middle of the heights within it — a tape laid anywhere there reads the
+    same to 0.5 %, and the middle is the level least far from all of them."""
+    best = float(g.max() if widest else g.min())
+    near = zs[np.abs(g - best) <= PLATEAU * best]
+    if float(near.max() - near.min()) > PLATEAU_SPAN:
+        return 0.5 * float(near.min() + near.max())
+    return float(zs[np.argmax(g) if widest else np.argmin(g)])
+
+
 def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
-    """Left leg (+x): calf = widest girth from 12 % of the stature to 2 % below the
-    proportional knee height (:data:`~.limbs.KNEE_HEIGHT` × stature); knee = the middle of the
-    narrow stretch between calf and crotch (girth within 2 % of its minimum there: a smooth
-    knee has a plateau, not a sharp minimum); ankle = narrowest girth between 3 % of the stature
-    and the calf (ISO 8559-1: the minimum girth above the malleoli); thigh 3.5 % of the stature
-    under the crotch.
+    """Left leg (+x), from its horizontal tape girths every 0.5 % of the stature:
+
+    * calf: the widest girth (ISO 8559-1 calf girth) between 12 % of the stature and the
+      narrowing under the knee (the narrowest girth from 2 % of the stature above the widest
+      girth below the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature, up to 5 %
+      of it under the crotch);
+    * knee: the middle of the kneecap — going up from that narrowing, where the girth has grown
+      by :data:`KNEE_RISE` (ISO 8559-1 knee girth: at the middle of the patella);
+    * ankle: the narrowest girth between 3 % of the stature and 3 % under the calf (ISO
+      8559-1: the minimum girth above the malleoli);
+    * thigh: 3.5 % of the stature under the crotch.
+
+    Narrowest and widest girths follow :func:`extreme` (the middle of a plateau).
 
     A leg without a calf — its widest girth in the calf's range at the top of the range, the
     leg tapering all the way down, as the human mannequin's lofted leg (knee girth 0.37 m over
     a 0.35 m calf) — has no narrowing to mark the knee: the knee is then the proportional
     height, and the calf the widest girth 2 % of the stature below it. (The stature is the
     body's top above the floor: on a headless scan the proportional height falls short.)"""
-    zl = np.linspace(0.02 * H, crotch - 0.01 * H, 90)
+    zl = np.arange(0.02 * H, crotch - 0.01 * H, 0.005 * H)
     leg = {}
     for z in zl:
         side = [o for o in outlines(v, t, z) if o.xmin > -0.02 and o.points[:, 0].mean() > 0]
@@ -501,23 +533,35 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
             leg[float(z)] = sec.tape_girth(side[0].points)  # the largest: the leg, not a hand
     zk = sorted(leg)
 
-    def within(lo: float, hi: float) -> list[float]:
+    def within(lo: float, hi: float) -> Array:
         c = [z for z in zk if lo <= z <= hi]
         if not c:
             raise ScanError(f"no leg section between {lo:.3f} and {hi:.3f} m")
-        return c
+        return np.array(c)
+
+    def girths(zs: Array) -> Array:
+        return np.array([leg[float(z)] for z in zs])
 
     z_knee = KNEE_HEIGHT * H
     calf_range = within(0.12 * H, z_knee - 0.02 * H)
-    calf = max(calf_range, key=leg.get)
-    if leg[calf] > CALF_BULGE * leg[calf_range[-1]]:
+    calf = float(calf_range[np.argmax(girths(calf_range))])
+    if leg[calf] > CALF_BULGE * leg[float(calf_range[-1])]:
         above = within(calf + 0.02 * H, crotch - 0.05 * H)
-        g_min = min(leg[z] for z in above)
-        narrow = [z for z in above if leg[z] <= 1.02 * g_min]
-        knee = 0.5 * (narrow[0] + narrow[-1])
+        g = girths(above)
+        k = int(np.argmin(g))
+        rise = np.flatnonzero(g[k:] >= (1.0 + KNEE_RISE) * g[k])
+        if len(rise):  # interpolated between the sections either side
+            j = k + int(rise[0])
+            za, zb, ga, gb = above[j - 1], above[j], g[j - 1], g[j]
+            knee = float(za + (zb - za) * ((1.0 + KNEE_RISE) * g[k] - ga) / (gb - ga))
+        else:
+            knee = float(above[-1])
+        calf_range = within(0.12 * H, float(above[k]))
+        calf = extreme(calf_range, girths(calf_range), widest=True)
     else:
         knee = z_knee
-    ankle = min(within(0.03 * H, calf - 0.03 * H), key=leg.get)
+    ankle_range = within(0.03 * H, calf - 0.03 * H)
+    ankle = extreme(ankle_range, girths(ankle_range), widest=False)
     return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
 
 
