@@ -52,7 +52,9 @@ from the armpit or bust to the shoulder) are this package's conventions, without
 
 Targets (issue 40): every height within :data:`HEIGHT_TOL`, every girth within :data:`GIRTH_TOL`.
 
-    python -m benchmarks.landmarks [body ...]     (analyse, compare, store, print the table)
+    python -m benchmarks.landmarks [body ...] [--before OLD_ANATOMY_PY]
+        (analyse, compare, print; a run of every body is stored in results/landmarks.json,
+        with --before also the record of that older anatomy.py as "before")
     python -m benchmarks.landmarks table          (the stored record as Markdown)
 """
 
@@ -317,23 +319,45 @@ def references(V: Array, T: npt.NDArray[np.int64], v: Array) -> dict[str, dict]:
 
 
 # -- the comparison ---------------------------------------------------------------------------
-def ours(V: Array, T: npt.NDArray[np.int64]) -> tuple[dict[str, float], dict[str, float]]:
-    """The package's landmarks and torso girths of a body."""
-    from fenics_garment.geometry.anatomy import analyse
+def ours(
+    V: Array, T: npt.NDArray[np.int64], anatomy_file: str | None = None
+) -> tuple[dict[str, float], dict[str, float]]:
+    """The package's landmarks and torso girths of a body; with ``anatomy_file``, those of
+    another version of ``fenics_garment/geometry/anatomy.py`` (e.g. the one before a change,
+    ``git show main:fenics_garment/geometry/anatomy.py > old.py``), run against this package's
+    other modules."""
+    if anatomy_file is None:
+        from fenics_garment.geometry.anatomy import analyse
+    else:
+        import importlib.util
 
+        name = "fenics_garment.geometry._anatomy_other"
+        spec = importlib.util.spec_from_file_location(name, anatomy_file)
+        mod = importlib.util.module_from_spec(spec)
+        sys.modules[name] = mod
+        spec.loader.exec_module(mod)
+        analyse = mod.analyse
     a = analyse(V, T)
     return a.landmarks, a.girths
 
 
-def compare(body: pop.Body) -> dict:
+def compare(body: pop.Body, anatomy_file: str | None = None) -> dict:
     """Heights, girths and their errors of one body (errors: ours − reference [m]; girth: ours /
     reference − 1; our leg girths, which the package does not report, are the tape at our
-    height)."""
+    height). With ``anatomy_file`` (:func:`ours`) also the record of that version, under
+    ``"other"``."""
     V, T, v = body_mesh(body)
-    t0 = time.perf_counter()
-    L, G = ours(V, T)
-    seconds = time.perf_counter() - t0
     ref = references(V, T, v)
+    out = _rows(body, V, T, ref, None)
+    if anatomy_file is not None:
+        out["other"] = _rows(body, V, T, ref, anatomy_file)
+    return out
+
+
+def _rows(body: pop.Body, V: Array, T: npt.NDArray[np.int64], ref: dict, anatomy_file) -> dict:
+    t0 = time.perf_counter()
+    L, G = ours(V, T, anatomy_file)
+    seconds = time.perf_counter() - t0
     tape = Tape(V, T)
     rows = {}
     for k in LEVELS:
@@ -390,8 +414,9 @@ def markdown(data: dict | None = None) -> str:
     if not recs:
         return "No landmark record yet (`python -m benchmarks.landmarks`)."
     now, old = worst(recs), worst(data.get("before", []))
+    done = "" if data.get("complete") else f" (a partial run: {len(recs)} of {len(shapes())})"
     out = [
-        f"Landmarks of the {len(recs)} shapes of the population found by "
+        f"Landmarks of the {len(recs)} shapes of the population{done} found by "
         "`anatomy.analyse`, against references that do not come from this package "
         "(`python -m benchmarks.landmarks`; definitions and sources in `benchmarks/landmarks.py`)."
         f" Targets: height within {100 * HEIGHT_TOL:.1f} cm, girth within "
@@ -412,9 +437,22 @@ def markdown(data: dict | None = None) -> str:
                      f"{_cell(old[k]['dg'][0], 100, '{:.2f}')} |")  # fmt: skip
         out.append(line)
     bad = failures(recs)
-    out += ["", f"Bodies × landmarks missing a target: {len(bad)}"
-            + (": " + "; ".join(f"{f.body} {f.level} {f.what}" for f in bad[:20]) if bad else ".")]
+    out += [
+        "",
+        f"Bodies × landmarks missing a target: {len(bad)}"
+        + (": " + "; ".join(f"{f.body} {f.level} {f.what}" for f in bad[:20]) if bad else "."),
+    ]
     return "\n".join(out)
+
+
+def _store(records: list[dict], before: list[dict], complete: bool) -> None:
+    data = _load()
+    data["after"] = records
+    if before:
+        data["before"] = before
+    data["complete"] = complete
+    RESULTS.parent.mkdir(exist_ok=True)
+    RESULTS.write_text(json.dumps(data, indent=1, default=float))
 
 
 def _load() -> dict:
@@ -438,30 +476,36 @@ def table(records: list[dict]) -> str:
 
 def main(argv: list[str]) -> int:
     names = [b.name for b in shapes()]
-    bad = check_args(argv, __doc__, {"--before"}, (), lambda a: a in {"table", *names})
+    bad = check_args(argv, __doc__, (), {"--before"}, lambda a: a in {"table", *names})
     if bad is not None:
         return bad
     if argv and argv[0] == "table":
         print(markdown())
         return 0
+    other = argv[argv.index("--before") + 1] if "--before" in argv else None
     chosen = [b for b in shapes() if b.name in argv] or shapes()
-    records = []
+    records, before = [], []
     for b in chosen:
         try:
-            records.append(compare(b))
+            r = compare(b, other)
         except Exception as e:  # a body the analysis refuses is a finding, not a crash
             print(f"{b.name}: {type(e).__name__}: {e}", flush=True)
             continue
+        if other is not None:
+            before.append(r.pop("other"))
+            print("before " + table(before[-1:]).splitlines()[-1], flush=True)
+        records.append(r)
         print(table(records[-1:]).splitlines()[-1], flush=True)
+        if len(chosen) == len(shapes()):  # a run of every body is stored as it goes
+            _store(records, before, complete=False)
     print(table(records))
     for k, w in worst(records).items():
-        print(f"{k:10s} max |dz| {_cell(w['dz'][0], 100, '{:.2f}'):>6s} cm ({w['dz'][1]})  "
-              f"max |dg| {_cell(w['dg'][0], 100, '{:.2f}'):>6s} % ({w['dg'][1]})")
-    if len(chosen) == len(shapes()):  # only a full run is stored
-        data = _load()
-        data["before" if "--before" in argv else "after"] = records
-        RESULTS.parent.mkdir(exist_ok=True)
-        RESULTS.write_text(json.dumps(data, indent=1, default=float))
+        print(
+            f"{k:10s} max |dz| {_cell(w['dz'][0], 100, '{:.2f}'):>6s} cm ({w['dz'][1]})  "
+            f"max |dg| {_cell(w['dg'][0], 100, '{:.2f}'):>6s} % ({w['dg'][1]})"
+        )
+    if len(chosen) == len(shapes()):
+        _store(records, before, complete=True)
         print(f"-> {RESULTS}")
     for f in failures(records):
         print(f"MISS {f.body} {f.level} {f.what}")

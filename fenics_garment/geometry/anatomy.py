@@ -18,8 +18,11 @@ centred near x = 0), not from fixed fractions of the stature:
   lateral point on that side. **Legs**: the rest below the crotch, split at x = 0.
 * **Shoulder points**: the highest point of the surface on the vertical line through each
   armpit point (the top of the armhole, close to the acromion).
-* **Neck**: the smallest torso girth between the shoulders and the face; **head**: from where,
-  going up, the girth first exceeds ``HEAD_FLARE`` × the neck girth (the jaw).
+* **Neck**: the smallest torso girth between the shoulders and the face lies just under the
+  chin; the **head** starts where, going up, the girth first exceeds ``HEAD_FLARE`` × that
+  girth (the chin's underside, the menton); the **neck base** 60 % of the way from the shoulder
+  points to that narrowest girth (the side neck point's level), and the **neck** level (mid-neck
+  girth) half-way between the neck base and the narrowest girth.
 * **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
   the upper arms never count; below the armpits the torso outline is on its own.
 * **Bust**: the level of the bust points, the most forward points of the chest going down
@@ -27,9 +30,13 @@ centred near x = 0), not from fixed fractions of the stature:
   the breasts, at the inframammary fold — the front under the bust points recedes below them
   and comes forward again (a small breast), or drops off the breast's underside (a large one);
   on a flat chest, a fixed share of the way from the bust to the waist; **waist**: the natural
-  waist, the narrowest torso girth below the under-bust; **hip**: the widest girth between the
-  thighs and the waist (:func:`torso_levels`). Knee, calf, ankle: the narrowest / widest leg
-  girths.
+  waist, the narrowest torso girth below the under-bust (the middle of a plateau, :func:`extreme`,
+  where there is no narrowing); **hip**: the widest girth between the thighs and the waist
+  (:func:`torso_levels`). Calf and ankle: the widest / narrowest leg girths; knee: the middle of
+  the kneecap, where the girth has grown by ``KNEE_RISE`` above the narrowing under it
+  (:func:`leg_levels`).
+* Validated on MakeHuman's population against its own measuring loops and ISO 8559-1 levels
+  measured independently (``benchmarks/landmarks.py``, ``tests/test_population_landmarks.py``).
 * **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
   perpendicular to it, elbows and wrists, knees and ankles found on the limb itself
   (:attr:`Anatomy.limbs`; their centreline points in :attr:`Anatomy.points` as
@@ -59,8 +66,10 @@ IArray = npt.NDArray[np.int64]
 
 #: lateral drop [m] between neighbouring sections that marks an arm leaving the torso
 ARM_JUMP = 0.02
-#: girth ratio over the neck girth where the head (jaw) begins
-HEAD_FLARE = 1.25
+#: girth ratio over the narrowest neck girth where the head (the chin's underside) begins: the
+#: narrowest girth lies just under the chin (MakeHuman's bodies: within 2 mm of the menton), and
+#: the girth grows there by 10 % within 5–8 mm (``benchmarks/landmarks.py``)
+HEAD_FLARE = 1.1
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
@@ -257,11 +266,11 @@ def analyse(
     marks: dict[str, float] = {"crotch": crotch, "shoulder": z_shoulder}
     if armpit:
         marks["armpit"] = z_armpit
-    neck, head = _neck_and_head(v, t, girth, z_shoulder + 0.01 * H, H - 0.005 * H)
-    marks["neck"] = neck
+    narrow, head = _neck_and_head(v, t, girth, z_shoulder + 0.01 * H, H - 0.005 * H)
     if head is not None:
         marks["head"] = head
-    marks["neck_base"] = z_shoulder + 0.6 * (neck - z_shoulder)
+    marks["neck_base"] = z_shoulder + 0.6 * (narrow - z_shoulder)
+    marks["neck"] = 0.5 * (marks["neck_base"] + narrow)  # mid-neck
     marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front, bool(armpit)))
     marks.update(leg_levels(v, t, crotch, H))
     if overrides:
@@ -351,13 +360,14 @@ def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[fl
     zn = [z for z in np.linspace(lo, hi, 60) if torso_outline(v, t, z) is not None]
     if not zn:
         raise ScanError("no neck found above the shoulders")
-    best_z, best_g = zn[0], np.inf
+    best_z, best_g, prev = zn[0], np.inf, zn[0]
     for z in zn:
         g = girth(z)
         if g < best_g:
             best_z, best_g = z, g
         elif g > HEAD_FLARE * best_g:
-            return float(best_z), float(z)
+            return float(best_z), 0.5 * float(prev + z)  # between the samples either side
+        prev = z
     return float(best_z), None
 
 
@@ -380,7 +390,8 @@ def torso_levels(
     * under-bust: the inframammary fold under the bust points (:func:`fold_level`), or on a flat
       chest :data:`FLAT_UNDERBUST` of the way from the bust down to the narrowest girth;
     * waist: the narrowest girth between a quarter of the crotch–armpit span and the under-bust
-      (1 % of the stature below it), at most three quarters up the span;
+      (1 % of the stature below it), at most three quarters up the span; the middle of a plateau
+      where the waist has no narrowing (:func:`extreme`);
     * hip: the widest girth between 3 % of the stature above the crotch (below, the tape spans
       both thighs) and the waist; abdomen half-way hip–waist; upper chest 40 % of the way from
       the bust to the shoulder (our convention, as in the parametric mannequin's proportions),
