@@ -268,7 +268,7 @@ def extremum(zs: Array, g: Array, widest: bool) -> tuple[float, float]:
     the girth stays within :data:`WAIST_PLATEAU` of it over more than :data:`WAIST_SPREAD`
     (no apparent extreme), the middle of the heights within it."""
     best = g.max() if widest else g.min()
-    near = zs[np.abs(g - best) <= WAIST_PLATEAU * best]
+    near = zs[np.abs(g - best) <= WAIST_PLATEAU * abs(best)]
     spread = float(near.max() - near.min())
     if spread > WAIST_SPREAD:
         return 0.5 * float(near.min() + near.max()), spread

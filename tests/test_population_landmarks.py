@@ -27,7 +27,7 @@ EXTREMES = ("f-maxcup-soft-heavy", "m-short-heavy-flabby-old", "m-tall-thin-unco
 
 def test_extreme_takes_the_middle_of_a_plateau() -> None:
     zs = np.linspace(0.0, 0.2, 101)
-    sharp = 1.0 + (zs - 0.05) ** 2  # one clear minimum at 0.05
+    sharp = 1.0 + 100.0 * (zs - 0.05) ** 2  # one clear minimum at 0.05 (0.5 % over ±7 mm)
     assert extreme(zs, sharp, widest=False) == pytest.approx(0.05)
     flat = np.where(np.abs(zs - 0.1) < 0.04, 1.0, 1.1)  # 1.0 from 0.06 to 0.14: no narrowing
     assert extreme(zs, flat, widest=False) == pytest.approx(0.1, abs=0.003)

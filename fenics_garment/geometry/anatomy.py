@@ -510,7 +510,7 @@ def extreme(zs: Array, g: Array, widest: bool) -> float:
     long even calf), the middle of the heights within it — a tape laid anywhere there reads the
     same to 0.5 %, and the middle is the level least far from all of them."""
     best = float(g.max() if widest else g.min())
-    near = zs[np.abs(g - best) <= PLATEAU * best]
+    near = zs[np.abs(g - best) <= PLATEAU * abs(best)]
     if float(near.max() - near.min()) > PLATEAU_SPAN:
         return 0.5 * float(near.min() + near.max())
     return float(zs[np.argmax(g) if widest else np.argmin(g)])
