@@ -165,6 +165,9 @@ class Tape:
         import trimesh
 
         self.mesh = trimesh.Trimesh(vertices, tris, process=False)
+        z = np.asarray(vertices)[np.asarray(tris), 2]
+        self._zlo, self._zhi = z.min(axis=1), z.max(axis=1)  # per triangle, to cut only those
+        self._cache: dict[tuple[float, tuple[float, float, float]], list[Array]] = {}
 
     def pieces(self, z: float, normal: tuple[float, float, float] = (0, 0, 1)) -> list[Array]:
         """The connected pieces of the section by the plane through (0, 0, z) (or x = z for
@@ -173,8 +176,16 @@ class Tape:
         from scipy.sparse import coo_matrix
         from scipy.sparse.csgraph import connected_components
 
+        key = (float(z), tuple(normal))
+        if key in self._cache:
+            return self._cache[key]
         origin = np.array(normal, dtype=float) * z
-        seg = trimesh.intersections.mesh_plane(self.mesh, normal, origin)
+        local = None
+        if tuple(normal) == (0, 0, 1):  # only the triangles spanning the height (speed)
+            local = np.flatnonzero((self._zlo <= z) & (self._zhi >= z))
+            if len(local) == 0:
+                return []
+        seg = trimesh.intersections.mesh_plane(self.mesh, normal, origin, local_faces=local)
         if len(seg) == 0:
             return []
         pts = seg.reshape(-1, 3)
@@ -183,7 +194,9 @@ class Tape:
         a, b = node[0::2], node[1::2]
         n = int(node.max()) + 1
         _, lab = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)))
-        return [seg[lab[a] == i].reshape(-1, 3) for i in range(lab.max() + 1)]
+        out = [seg[lab[a] == i].reshape(-1, 3) for i in range(lab.max() + 1)]
+        self._cache[key] = out
+        return out
 
     @staticmethod
     def girth(p: Array) -> float:
@@ -275,11 +288,13 @@ def extremum(zs: Array, g: Array, widest: bool) -> tuple[float, float]:
     return float(zs[np.argmax(g) if widest else np.argmin(g)]), spread
 
 
-def references(V: Array, T: npt.NDArray[np.int64], v: Array) -> dict[str, dict]:
+def references(
+    V: Array, T: npt.NDArray[np.int64], v: Array, tape: Tape | None = None
+) -> dict[str, dict]:
     """Reference height [m], girth [m] (or None) and MakeHuman's own loop (mean height, length
     along the skin) of each landmark of one body (module doc). ``V``, ``T``: the body group;
-    ``v``: all hm08 vertices in the same frame."""
-    tape = Tape(V, T)
+    ``v``: all hm08 vertices in the same frame; ``tape``: a :class:`Tape` of the body group."""
+    tape = Tape(V, T) if tape is None else tape
     H = float(V[:, 2].max())
     out: dict[str, dict] = {}
 
@@ -347,18 +362,18 @@ def compare(body: pop.Body, anatomy_file: str | None = None) -> dict:
     height). With ``anatomy_file`` (:func:`ours`) also the record of that version, under
     ``"other"``."""
     V, T, v = body_mesh(body)
-    ref = references(V, T, v)
-    out = _rows(body, V, T, ref, None)
+    tape = Tape(V, T)
+    ref = references(V, T, v, tape)
+    out = _rows(body, V, ref, tape, None)
     if anatomy_file is not None:
-        out["other"] = _rows(body, V, T, ref, anatomy_file)
+        out["other"] = _rows(body, V, ref, tape, anatomy_file)
     return out
 
 
-def _rows(body: pop.Body, V: Array, T: npt.NDArray[np.int64], ref: dict, anatomy_file) -> dict:
+def _rows(body: pop.Body, V: Array, ref: dict, tape: Tape, anatomy_file: str | None) -> dict:
     t0 = time.perf_counter()
-    L, G = ours(V, T, anatomy_file)
+    L, G = ours(V, np.asarray(tape.mesh.faces), anatomy_file)
     seconds = time.perf_counter() - t0
-    tape = Tape(V, T)
     rows = {}
     for k in LEVELS:
         r = ref[k]
