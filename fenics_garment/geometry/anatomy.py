@@ -20,9 +20,11 @@ centred near x = 0), not from fixed fractions of the stature:
   armpit point (the top of the armhole, close to the acromion).
 * **Neck**: the smallest torso girth between the shoulders and the face lies just under the
   chin; the **head** starts where, going up, the girth first exceeds ``HEAD_FLARE`` × that
-  girth (the chin's underside, the menton); the **neck base** 60 % of the way from the shoulder
-  points to that narrowest girth (the side neck point's level), and the **neck** level (mid-neck
-  girth) half-way between the neck base and the narrowest girth.
+  girth (the chin's underside, the menton), or lower where the front comes forward abruptly
+  under the chin (:func:`_chin`: a double chin, whose girth does not flare); the **neck base**
+  60 % of the way from the shoulder points to that narrowest girth (the side neck point's
+  level), and the **neck** level (mid-neck girth) half-way between the neck base and the
+  narrowest girth.
 * **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
   the upper arms never count; below the armpits the torso outline is on its own.
 * **Bust**: the level of the bust points, the most forward points of the chest going down
@@ -70,6 +72,12 @@ ARM_JUMP = 0.02
 #: narrowest girth lies just under the chin (MakeHuman's bodies: within 2 mm of the menton), and
 #: the girth grows there by 10 % within 5–8 mm (``benchmarks/landmarks.py``)
 HEAD_FLARE = 1.1
+#: :func:`_chin`: the chin's underside is where the front of the body near its mid-plane (within
+#: ``CHIN_BAND`` [m] of it) comes forward by ``CHIN_JUMP`` of the stature (1 cm on a 1.67 m body)
+#: within one step of ``CHIN_STEP`` of it (4 mm); on MakeHuman's population within 3 mm of the
+#: menton measured independently (``benchmarks/landmarks.py``), also under a double chin, where
+#: the girth does not flare (``HEAD_FLARE``)
+CHIN_BAND, CHIN_JUMP, CHIN_STEP = 0.015, 0.006, 0.0025
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
@@ -266,7 +274,12 @@ def analyse(
     marks: dict[str, float] = {"crotch": crotch, "shoulder": z_shoulder}
     if armpit:
         marks["armpit"] = z_armpit
-    narrow, head = _neck_and_head(v, t, girth, z_shoulder + 0.01 * H, H - 0.005 * H)
+    lo_neck = z_shoulder + 0.01 * H
+    chin = _chin(v, t, z_shoulder, H)
+    top = H - 0.005 * H if chin is None else max(chin, lo_neck + 0.01 * H)
+    narrow, head = _neck_and_head(v, t, girth, lo_neck, top)
+    if chin is not None:  # the chin's underside, where the girth may not flare (double chin)
+        head = chin if head is None else min(head, chin)
     if head is not None:
         marks["head"] = head
     marks["neck_base"] = z_shoulder + 0.6 * (narrow - z_shoulder)
@@ -351,6 +364,27 @@ def _arm_root_box(v: Array, t: IArray, x: float, z_ap: float, z_top: float) -> A
     p = max(inside, key=lambda q: abs(sec.polygon_area(q)))
     p = p[p[:, 1] >= z_ap - 1e-3]
     return np.array([p[:, 0].min(), p[:, 0].max(), z_ap, z_top])
+
+
+def _chin(v: Array, t: IArray, lo: float, H: float) -> float | None:
+    """The chin's underside (menton, ISO 8559-1): going up from ``lo`` in steps of
+    :data:`CHIN_STEP` of the stature, the first height where the front of the torso outline
+    within ``CHIN_BAND`` of its middle comes forward by more than :data:`CHIN_JUMP` of the
+    stature within one step (the lower end of that step); None without such a jump (no head,
+    or a head without a chin)."""
+    step, prev = CHIN_STEP * H, None
+    for z in np.arange(lo, 0.95 * H, step):
+        o = torso_outline(v, t, z)
+        p = None if o is None else o.points
+        sel = None if p is None else np.abs(p[:, 0] - 0.5 * (o.xmin + o.xmax)) <= CHIN_BAND
+        if sel is None or not sel.any():
+            prev = None
+            continue
+        f = float(-p[sel, 1].min())
+        if prev is not None and f - prev > CHIN_JUMP * H:
+            return float(z - step)
+        prev = f
+    return None
 
 
 def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[float, float | None]:
