@@ -111,6 +111,9 @@ MH_LOOPS: dict[str, list[int]] = {
     "ankle": [11460, 11464, 11458, 11459, 11419, 11418, 12958, 12965, 12960, 12963, 12961, 12962,
               12964, 12927, 13028, 12957, 11463, 11461, 11457, 11460],
 }  # fmt: skip
+#: :func:`_fold`: the fold is looked for this far [m] under the bust points, and must be a pocket
+#: at least this deep [m] in the front profile
+FOLD_WINDOW, FOLD_MIN = 0.12, 0.01
 #: MakeHuman 1.3.2, same table: ``shoulder-dist`` = [7478, 8274] (side neck point, acromion),
 #: ``upperarm-length`` = [8274, 10037] (acromion, elbow)
 MH_ACROMION, MH_SIDE_NECK = 8274, 7478
@@ -249,12 +252,12 @@ def _armpit(tape: Tape, lo: float, hi: float) -> float:
     return min(out)
 
 
-def _sagittal_front(tape: Tape, zs: Array) -> Array:
-    """The forward reach (−y) of the mid-sagittal section (plane x = 0) at each height ``zs``:
-    its segments crossing the height, interpolated."""
+def _sagittal_front(tape: Tape, zs: Array, x: float = 0.0) -> Array:
+    """The forward reach (−y) of the sagittal section by the plane at ``x`` (the mid-sagittal
+    one by default) at each height ``zs``: its segments crossing the height, interpolated."""
     import trimesh
 
-    seg = trimesh.intersections.mesh_plane(tape.mesh, [1, 0, 0], [0, 0, 0])
+    seg = trimesh.intersections.mesh_plane(tape.mesh, [1, 0, 0], [x, 0, 0])
     a, b = seg[:, 0], seg[:, 1]
     out = np.full(len(zs), np.nan)
     for i, z in enumerate(zs):
@@ -274,6 +277,31 @@ def _menton(tape: Tape, lo: float, hi: float) -> float:
     f = _sagittal_front(tape, zs)
     jump = np.flatnonzero(f[4:] - f[:-4] > 0.01)
     return float(zs[jump[0]]) if len(jump) else float("nan")
+
+
+def _fold(tape: Tape, x: float, bust: float) -> float | None:
+    """The inframammary fold on the front profile of the sagittal section through a bust point
+    (plane at ``x``): below the bust point ``bust``, every 2 mm down to :data:`FOLD_WINDOW`
+    under it, the point deepest under the profile's convex envelope (the corner where the
+    breast's lower contour meets the chest wall), if it is at least :data:`FOLD_MIN` deep (a
+    breast; a flat chest gives None)."""
+    zs = np.arange(bust + 0.004, bust - FOLD_WINDOW, -0.002)
+    f = _sagittal_front(tape, zs, x)
+    ok = np.isfinite(f)
+    zs, f = zs[ok], f[ok]
+    if len(zs) < 5:
+        return None
+    # the upper (forward) envelope: the largest chord of the front over each height
+    env = np.full(len(zs), -np.inf)
+    for i in range(len(zs)):
+        for j in range(i + 1, len(zs)):
+            w = (np.arange(i, j + 1) - i) / (j - i)
+            env[i : j + 1] = np.maximum(env[i : j + 1], f[i] + w * (f[j] - f[i]))
+    depth = env - f
+    k = int(np.argmax(depth))
+    if depth[k] < FOLD_MIN:
+        return None
+    return float(zs[k])
 
 
 def extremum(zs: Array, g: Array, widest: bool) -> tuple[float, float]:
@@ -311,8 +339,16 @@ def references(
     out["bust"] = {"z": float(nip[:, 2].mean()), **loop("bust")}
     ub = v[MH_LOOPS["underbust"]]
     xn = float(np.abs(nip[:, 0]).mean())
-    front = ub[(np.abs(ub[:, 0]) <= xn) & (ub[:, 1] < 0.0)]
-    out["underbust"] = {"z": float(front[:, 2].min()), **loop("underbust")}
+    front = ub[(np.abs(ub[:, 0]) <= xn) & (ub[:, 1] < 0.5 * (ub[:, 1].min() + ub[:, 1].max()))]
+    mh_front = float(front[:, 2].min())
+    folds = [_fold(tape, float(nip[i, 0]), float(nip[:, 2].mean())) for i in range(2)]
+    folds = [z for z in folds if z is not None]
+    out["underbust"] = {
+        "z": float(np.mean(folds)) if folds else mh_front,
+        "mh_front_z": mh_front,
+        "from": "profile fold" if folds else "MH loop",
+        **loop("underbust"),
+    }
     zs = np.arange(out["hip"]["z"], out["underbust"]["z"], 0.002)
     z, spread = extremum(zs, np.array([tape.girth_at("waist", z) for z in zs]), False)
     out["waist"] = {"z": z, "plateau_m": spread, **loop("waist")}
