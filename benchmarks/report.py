@@ -131,7 +131,7 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
 
     parts += ["## targets", "", targets_markdown(), ""]
     for name, d in data.items():
-        if name == "targets":  # its records feed the section above
+        if name in ("targets", "landmarks"):  # records shown in another section
             continue
         recs = d.get("runs", [])
         meta = d.get("meta", {})
@@ -167,6 +167,10 @@ def write_report(results: Path = RESULTS, say=print) -> Path:
             from benchmarks.bodies import markdown as bodies_markdown
 
             parts += [bodies_markdown(d), ""]
+            if "landmarks" in data:  # their landmarks against references (benchmarks/landmarks.py)
+                from benchmarks.landmarks import markdown as landmarks_markdown
+
+                parts += ["### landmarks", "", landmarks_markdown(data["landmarks"]), ""]
             continue
         if name == "mesh_noise":  # one scene on meshes of the same size (benchmarks/mesh_noise.py)
             from benchmarks.mesh_noise import markdown as noise_markdown

@@ -18,8 +18,13 @@ centred near x = 0), not from fixed fractions of the stature:
   lateral point on that side. **Legs**: the rest below the crotch, split at x = 0.
 * **Shoulder points**: the highest point of the surface on the vertical line through each
   armpit point (the top of the armhole, close to the acromion).
-* **Neck**: the smallest torso girth between the shoulders and the face; **head**: from where,
-  going up, the girth first exceeds ``HEAD_FLARE`` × the neck girth (the jaw).
+* **Neck**: the smallest torso girth between the shoulders and the face lies just under the
+  chin; the **head** starts where, going up, the girth first exceeds ``HEAD_FLARE`` × that
+  girth (the chin's underside, the menton), or lower where the front comes forward abruptly
+  under the chin (:func:`_chin`: a double chin, whose girth does not flare); the **neck base**
+  60 % of the way from the shoulder points to that narrowest girth (the side neck point's
+  level), and the **neck** level (mid-neck girth) half-way between the neck base and the
+  narrowest girth.
 * **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
   the upper arms never count; below the armpits the torso outline is on its own.
 * **Bust**: the level of the bust points, the most forward points of the chest going down
@@ -27,9 +32,13 @@ centred near x = 0), not from fixed fractions of the stature:
   the breasts, at the inframammary fold — the front under the bust points recedes below them
   and comes forward again (a small breast), or drops off the breast's underside (a large one);
   on a flat chest, a fixed share of the way from the bust to the waist; **waist**: the natural
-  waist, the narrowest torso girth below the under-bust; **hip**: the widest girth between the
-  thighs and the waist (:func:`torso_levels`). Knee, calf, ankle: the narrowest / widest leg
-  girths.
+  waist, the narrowest torso girth below the under-bust (the middle of a plateau, :func:`extreme`,
+  where there is no narrowing); **hip**: the widest girth between the thighs and the waist
+  (:func:`torso_levels`). Calf and ankle: the widest / narrowest leg girths; knee: the middle of
+  the kneecap, where the girth has grown by ``KNEE_RISE`` above the narrowing under it
+  (:func:`leg_levels`).
+* Validated on MakeHuman's population against its own measuring loops and ISO 8559-1 levels
+  measured independently (``benchmarks/landmarks.py``, ``tests/test_population_landmarks.py``).
 * **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
   perpendicular to it, elbows and wrists, knees and ankles found on the limb itself
   (:attr:`Anatomy.limbs`; their centreline points in :attr:`Anatomy.points` as
@@ -59,11 +68,27 @@ IArray = npt.NDArray[np.int64]
 
 #: lateral drop [m] between neighbouring sections that marks an arm leaving the torso
 ARM_JUMP = 0.02
-#: girth ratio over the neck girth where the head (jaw) begins
-HEAD_FLARE = 1.25
+#: girth ratio over the narrowest neck girth where the head (the chin's underside) begins: the
+#: narrowest girth lies just under the chin (MakeHuman's bodies: within 2 mm of the menton), and
+#: the girth grows there by 10 % within 5–8 mm (``benchmarks/landmarks.py``)
+HEAD_FLARE = 1.1
+#: :func:`_chin`: the chin's underside is where the front of the body near its mid-plane (within
+#: ``CHIN_BAND`` [m] of it) comes forward by ``CHIN_JUMP`` of the stature (1 cm on a 1.67 m body)
+#: within one step of ``CHIN_STEP`` of it (4 mm); on MakeHuman's population within 3 mm of the
+#: menton measured independently (``benchmarks/landmarks.py``), also under a double chin, where
+#: the girth does not flare (``HEAD_FLARE``)
+CHIN_BAND, CHIN_JUMP, CHIN_STEP = 0.015, 0.006, 0.0025
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
+#: The knee (the middle of the kneecap) is where, going up from the narrowing under it, the leg's
+#: tape girth has grown by this share: calibrated on MakeHuman's knee measuring loop
+#: (``benchmarks/landmarks.py``: 3.4–6 % above the narrowing on its woman, man and heavy man).
+KNEE_RISE = 0.05
+#: :func:`extreme`: a girth within this share of the narrowest (widest) ...
+PLATEAU = 0.005
+#: ... over more than this height [m] has no apparent extreme: the middle of it is taken
+PLATEAU_SPAN = 0.03
 #: Depth [fraction of the stature] by which the front must recede below the bust's most forward
 #: point, and come forward again below the inframammary fold, for either to count: 0.2 %, 3.3 mm
 #: on a 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and
@@ -249,11 +274,16 @@ def analyse(
     marks: dict[str, float] = {"crotch": crotch, "shoulder": z_shoulder}
     if armpit:
         marks["armpit"] = z_armpit
-    neck, head = _neck_and_head(v, t, girth, z_shoulder + 0.01 * H, H - 0.005 * H)
-    marks["neck"] = neck
+    lo_neck = z_shoulder + 0.01 * H
+    chin = _chin(v, t, z_shoulder, H)
+    top = H - 0.005 * H if chin is None else max(chin, lo_neck + 0.01 * H)
+    narrow, head = _neck_and_head(v, t, girth, lo_neck, top)
+    if chin is not None:  # the chin's underside, where the girth may not flare (double chin)
+        head = chin if head is None else min(head, chin)
     if head is not None:
         marks["head"] = head
-    marks["neck_base"] = z_shoulder + 0.6 * (neck - z_shoulder)
+    marks["neck_base"] = z_shoulder + 0.6 * (narrow - z_shoulder)
+    marks["neck"] = 0.5 * (marks["neck_base"] + narrow)  # mid-neck
     marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front, bool(armpit)))
     marks.update(leg_levels(v, t, crotch, H))
     if overrides:
@@ -336,6 +366,27 @@ def _arm_root_box(v: Array, t: IArray, x: float, z_ap: float, z_top: float) -> A
     return np.array([p[:, 0].min(), p[:, 0].max(), z_ap, z_top])
 
 
+def _chin(v: Array, t: IArray, lo: float, H: float) -> float | None:
+    """The chin's underside (menton, ISO 8559-1): going up from ``lo`` in steps of
+    :data:`CHIN_STEP` of the stature, the first height where the front of the torso outline
+    within ``CHIN_BAND`` of its middle comes forward by more than :data:`CHIN_JUMP` of the
+    stature within one step (the lower end of that step); None without such a jump (no head,
+    or a head without a chin)."""
+    step, prev = CHIN_STEP * H, None
+    for z in np.arange(lo, 0.95 * H, step):
+        o = torso_outline(v, t, z)
+        p = None if o is None else o.points
+        sel = None if p is None else np.abs(p[:, 0] - 0.5 * (o.xmin + o.xmax)) <= CHIN_BAND
+        if sel is None or not sel.any():
+            prev = None
+            continue
+        f = float(-p[sel, 1].min())
+        if prev is not None and f - prev > CHIN_JUMP * H:
+            return float(z - step)
+        prev = f
+    return None
+
+
 def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[float, float | None]:
     """Going up from ``lo``: the neck is the running girth minimum at the height where the girth
     first exceeds ``HEAD_FLARE`` times it (the jaw: the head starts there); without a head the
@@ -343,13 +394,14 @@ def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[fl
     zn = [z for z in np.linspace(lo, hi, 60) if torso_outline(v, t, z) is not None]
     if not zn:
         raise ScanError("no neck found above the shoulders")
-    best_z, best_g = zn[0], np.inf
+    best_z, best_g, prev = zn[0], np.inf, zn[0]
     for z in zn:
         g = girth(z)
         if g < best_g:
             best_z, best_g = z, g
         elif g > HEAD_FLARE * best_g:
-            return float(best_z), float(z)
+            return float(best_z), 0.5 * float(prev + z)  # between the samples either side
+        prev = z
     return float(best_z), None
 
 
@@ -372,7 +424,8 @@ def torso_levels(
     * under-bust: the inframammary fold under the bust points (:func:`fold_level`), or on a flat
       chest :data:`FLAT_UNDERBUST` of the way from the bust down to the narrowest girth;
     * waist: the narrowest girth between a quarter of the crotch–armpit span and the under-bust
-      (1 % of the stature below it), at most three quarters up the span;
+      (1 % of the stature below it), at most three quarters up the span; the middle of a plateau
+      where the waist has no narrowing (:func:`extreme`);
     * hip: the widest girth between 3 % of the stature above the crotch (below, the tape spans
       both thighs) and the waist; abdomen half-way hip–waist; upper chest 40 % of the way from
       the bust to the shoulder (our convention, as in the parametric mannequin's proportions),
@@ -402,7 +455,11 @@ def torso_levels(
         under = fold_level(outline, bust, half_gap, max(narrowest, bust - FOLD_REACH * H), H)
     if under is None:
         under = bust - FLAT_UNDERBUST * (bust - narrowest)
-    waist = arg(np.argmin, crotch + 0.25 * span, min(crotch + 0.75 * span, under - 0.01 * H))
+    lo, hi = crotch + 0.25 * span, min(crotch + 0.75 * span, under - 0.01 * H)
+    sel = (zs >= lo) & (zs <= hi)
+    if not sel.any():
+        raise ScanError(f"no torso section between {lo:.3f} and {hi:.3f} m")
+    waist = extreme(zs[sel], g[sel], widest=False)
     hip = arg(np.argmax, crotch + 0.03 * H, waist - 0.02 * H)  # not the span across the thighs
     return {
         "hip": hip,
@@ -480,20 +537,40 @@ def fold_level(outline, bust: float, half_gap: float, lo: float, H: float) -> fl
     return None
 
 
+def extreme(zs: Array, g: Array, widest: bool) -> float:
+    """The height of the narrowest (``widest``: the widest) girth ``g`` over the heights ``zs``;
+    where the girth stays within :data:`PLATEAU` of that extreme over more than
+    :data:`PLATEAU_SPAN` of height (no apparent narrowing or bulge: a heavy body's waist, a
+    long even calf), the middle of the heights within it — a tape laid anywhere there reads the
+    same to 0.5 %, and the middle is the level least far from all of them."""
+    best = float(g.max() if widest else g.min())
+    near = zs[np.abs(g - best) <= PLATEAU * abs(best)]
+    if float(near.max() - near.min()) > PLATEAU_SPAN:
+        return 0.5 * float(near.min() + near.max())
+    return float(zs[np.argmax(g) if widest else np.argmin(g)])
+
+
 def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
-    """Left leg (+x): calf = widest girth from 12 % of the stature to 2 % below the
-    proportional knee height (:data:`~.limbs.KNEE_HEIGHT` × stature); knee = the middle of the
-    narrow stretch between calf and crotch (girth within 2 % of its minimum there: a smooth
-    knee has a plateau, not a sharp minimum); ankle = narrowest girth between 3 % of the stature
-    and the calf (ISO 8559-1: the minimum girth above the malleoli); thigh 3.5 % of the stature
-    under the crotch.
+    """Left leg (+x), from its horizontal tape girths every 0.5 % of the stature:
+
+    * calf: the widest girth (ISO 8559-1 calf girth) between 12 % of the stature and the
+      narrowing under the knee (the narrowest girth from 2 % of the stature above the widest
+      girth below the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature, up to 5 %
+      of it under the crotch);
+    * knee: the middle of the kneecap — going up from that narrowing, where the girth has grown
+      by :data:`KNEE_RISE` (ISO 8559-1 knee girth: at the middle of the patella);
+    * ankle: the narrowest girth between 3 % of the stature and 3 % under the calf (ISO
+      8559-1: the minimum girth above the malleoli);
+    * thigh: 3.5 % of the stature under the crotch.
+
+    Narrowest and widest girths follow :func:`extreme` (the middle of a plateau).
 
     A leg without a calf — its widest girth in the calf's range at the top of the range, the
     leg tapering all the way down, as the human mannequin's lofted leg (knee girth 0.37 m over
     a 0.35 m calf) — has no narrowing to mark the knee: the knee is then the proportional
     height, and the calf the widest girth 2 % of the stature below it. (The stature is the
     body's top above the floor: on a headless scan the proportional height falls short.)"""
-    zl = np.linspace(0.02 * H, crotch - 0.01 * H, 90)
+    zl = np.arange(0.02 * H, crotch - 0.01 * H, 0.005 * H)
     leg = {}
     for z in zl:
         side = [o for o in outlines(v, t, z) if o.xmin > -0.02 and o.points[:, 0].mean() > 0]
@@ -501,23 +578,35 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
             leg[float(z)] = sec.tape_girth(side[0].points)  # the largest: the leg, not a hand
     zk = sorted(leg)
 
-    def within(lo: float, hi: float) -> list[float]:
+    def within(lo: float, hi: float) -> Array:
         c = [z for z in zk if lo <= z <= hi]
         if not c:
             raise ScanError(f"no leg section between {lo:.3f} and {hi:.3f} m")
-        return c
+        return np.array(c)
+
+    def girths(zs: Array) -> Array:
+        return np.array([leg[float(z)] for z in zs])
 
     z_knee = KNEE_HEIGHT * H
     calf_range = within(0.12 * H, z_knee - 0.02 * H)
-    calf = max(calf_range, key=leg.get)
-    if leg[calf] > CALF_BULGE * leg[calf_range[-1]]:
+    calf = float(calf_range[np.argmax(girths(calf_range))])
+    if leg[calf] > CALF_BULGE * leg[float(calf_range[-1])]:
         above = within(calf + 0.02 * H, crotch - 0.05 * H)
-        g_min = min(leg[z] for z in above)
-        narrow = [z for z in above if leg[z] <= 1.02 * g_min]
-        knee = 0.5 * (narrow[0] + narrow[-1])
+        g = girths(above)
+        k = int(np.argmin(g))
+        rise = np.flatnonzero(g[k:] >= (1.0 + KNEE_RISE) * g[k])
+        if len(rise):  # interpolated between the sections either side
+            j = k + int(rise[0])
+            za, zb, ga, gb = above[j - 1], above[j], g[j - 1], g[j]
+            knee = float(za + (zb - za) * ((1.0 + KNEE_RISE) * g[k] - ga) / (gb - ga))
+        else:
+            knee = float(above[-1])
+        calf_range = within(0.12 * H, float(above[k]))
+        calf = extreme(calf_range, girths(calf_range), widest=True)
     else:
         knee = z_knee
-    ankle = min(within(0.03 * H, calf - 0.03 * H), key=leg.get)
+    ankle_range = within(0.03 * H, calf - 0.03 * H)
+    ankle = extreme(ankle_range, girths(ankle_range), widest=False)
     return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
 
 

@@ -151,27 +151,35 @@ def slice_chains(
     cut = np.flatnonzero(above.any(axis=1) & ~above.all(axis=1))
     if cut.size == 0:
         return []
-    # For each cut triangle, the two crossed edges (as sorted vertex pairs) and their points.
-    seg_edges = []
-    for local in ((0, 1), (1, 2), (2, 0)):
-        a, b = tri[cut, local[0]], tri[cut, local[1]]
-        crossed = above[cut, local[0]] != above[cut, local[1]]
-        seg_edges.append((np.minimum(a, b), np.maximum(a, b), crossed))
-    ids: dict[tuple[int, int], int] = {}
+    # For each cut triangle, the two crossed edges (as sorted vertex pairs) and their points;
+    # edges are numbered in the order first met going through the local edges (0, 1), (1, 2),
+    # (2, 0) of all cut triangles in turn.
+    n_v = len(v)
+    keys_l, segs_l = [], []
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        a, b = tri[cut, i], tri[cut, j]
+        s = np.flatnonzero(above[cut, i] != above[cut, j])
+        keys_l.append(np.minimum(a[s], b[s]).astype(np.int64) * n_v + np.maximum(a[s], b[s]))
+        segs_l.append(s)
+    key_all, seg_all = np.concatenate(keys_l), np.concatenate(segs_l)
+    uniq, first, inv = np.unique(key_all, return_index=True, return_inverse=True)
+    rank = np.empty(len(uniq), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(uniq))
+    edge_of = rank[inv.ravel()]
     seg_pair = np.full((cut.size, 2), -1, dtype=np.int64)
-    for lo, hi, crossed in seg_edges:
-        for s in np.flatnonzero(crossed):
-            e = ids.setdefault((int(lo[s]), int(hi[s])), len(ids))
-            seg_pair[s, 0 if seg_pair[s, 0] < 0 else 1] = e
-    keys = list(ids)
-    kk = np.array(keys)
+    order = np.argsort(seg_all, kind="stable")  # per segment, its first then second edge
+    seg_pair[seg_all[order[0::2]], 0] = edge_of[order[0::2]]
+    seg_pair[seg_all[order[1::2]], 1] = edge_of[order[1::2]]
+    kk = np.column_stack([uniq // n_v, uniq % n_v])[np.argsort(rank)]
+    keys = range(len(kk))
     t = zz[kk[:, 0]] / (zz[kk[:, 0]] - zz[kk[:, 1]])
     pts = v[kk[:, 0], :2] + t[:, None] * (v[kk[:, 1], :2] - v[kk[:, 0], :2])
     edge_segs: list[list[int]] = [[] for _ in keys]
-    for s, (e0, e1) in enumerate(seg_pair):
+    pair: list[list[int]] = seg_pair.tolist()  # plain lists: the walk below is scalar work
+    for s, (e0, e1) in enumerate(pair):
         edge_segs[e0].append(s)
         edge_segs[e1].append(s)
-    used = np.zeros(cut.size, dtype=bool)
+    used = [False] * cut.size
     loops: list[tuple[Array, bool]] = []
     # start open chains at edges with a single segment, then closed loops anywhere
     starts = [e for e, ss in enumerate(edge_segs) if len(ss) == 1]
@@ -185,7 +193,7 @@ def slice_chains(
         closed = False
         while True:
             used[s] = True
-            e = seg_pair[s, 1] if seg_pair[s, 0] == e else seg_pair[s, 0]
+            e = pair[s][1] if pair[s][0] == e else pair[s][0]
             if e == e_start:
                 closed = True
                 break

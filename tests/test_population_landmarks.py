@@ -1,0 +1,71 @@
+"""Landmarks of extreme bodies of the population against references that do not come from the
+package (issue 40, item 2).
+
+The references are ``benchmarks/landmarks.py``'s: MakeHuman's own measuring loops and points
+(vertex indices of its base mesh, from the ``makehuman`` 1.3.2 wheel's measurement plugin; the
+MPFB2 rig's nipples) and ISO 8559-1 levels measured with trimesh sections — each definition and
+its source is listed there. The target: every landmark height within 1.5 cm and every girth
+within 2 % (the record of all 37 bodies: ``benchmarks/results/landmarks.json``, REPORT.md
+section "bodies").
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from benchmarks import landmarks as lm
+from fenics_garment.geometry import population as pop
+from fenics_garment.geometry.anatomy import extreme
+
+#: the extremes of the population: the largest, softest breasts on a heavy woman; the short,
+#: heavy, flabby old man (a waist without a narrowing); the tall thin man of uncommon
+#: proportions; the short thin teenage girl; the heavy, muscular, androgynous body
+EXTREMES = ("f-maxcup-soft-heavy", "m-short-heavy-flabby-old", "m-tall-thin-uncommon",
+            "f-short-thin-teen", "x-androgynous-heavy")  # fmt: skip
+#: bodies still missing the targets (measured, benchmarks/results/landmarks.json; issue 40 item 2
+#: left open for them). The under-bust reference is the corner of the front profile under the bust
+#: point (benchmarks/landmarks.py ``_fold``), where the girth changes steeply.
+MISSES = {
+    "m-short-heavy-flabby-old": "hip +7.8 cm / +7.9 % (MakeHuman's hip loop lies 8 cm under both "
+    "the widest girth and the rearmost point of the buttocks), waist −2.6 cm, knee −2.7 cm, neck "
+    "base −2.3 cm, neck girth +8.3 % (no neck between shoulders and double chin)",
+    "f-maxcup-soft-heavy": "under-bust +2.4 cm / −5.3 %, shoulder +1.7 cm",
+    "m-tall-thin-uncommon": "knee +5.4 cm / +3.6 %, thigh −1.7 cm, under-bust −2.9 cm / −2.1 %, "
+    "neck girth +2.7 %",
+    "f-short-thin-teen": "calf +3.9 cm / +4.4 %, knee +2.6 cm / +5.2 %, under-bust +1.6 cm / "
+    "+4.5 %, bust +2.7 cm, shoulder +1.6 cm, neck girth +2.1 %",
+    "x-androgynous-heavy": "knee −1.7 cm / −3.9 %, thigh +1.8 cm, under-bust −3.1 cm / −5.0 %, "
+    "neck girth +3.7 %",
+}
+
+
+def test_extreme_takes_the_middle_of_a_plateau() -> None:
+    zs = np.linspace(0.0, 0.2, 101)
+    sharp = 1.0 + 100.0 * (zs - 0.05) ** 2  # one clear minimum at 0.05 (0.5 % over ±7 mm)
+    assert extreme(zs, sharp, widest=False) == pytest.approx(0.05)
+    flat = np.where(np.abs(zs - 0.1) < 0.04, 1.0, 1.1)  # 1.0 from 0.06 to 0.14: no narrowing
+    assert extreme(zs, flat, widest=False) == pytest.approx(0.1, abs=0.003)
+    assert extreme(zs, -sharp, widest=True) == pytest.approx(0.05)
+
+
+def _case(name: str):
+    if name not in MISSES:
+        return name
+    miss = pytest.mark.xfail(strict=True, raises=AssertionError, reason=MISSES[name])
+    return pytest.param(name, marks=miss)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", [_case(n) for n in EXTREMES])
+def test_landmarks_of_extreme_bodies_against_references(name: str) -> None:
+    record = lm.compare(pop.by_name(name))
+    rows = record["levels"]
+    assert set(rows) == set(lm.LEVELS)
+    for level, row in rows.items():
+        assert row["ours_z"] is not None, level
+        print(f"{name} {level:10s} ref {row['z']:.4f} ours {row['ours_z']:.4f} "
+              f"({100 * row['dz']:+.2f} cm)"
+              + (f" girth {100 * row['dg']:+.2f} %" if "dg" in row else ""))  # fmt: skip
+    bad = [(f.level, f.what) for f in lm.failures([record])]
+    assert not bad, f"{name}: {bad}"
