@@ -35,8 +35,7 @@ centred near x = 0), not from fixed fractions of the stature:
   waist, the narrowest torso girth below the under-bust (the middle of a plateau, :func:`extreme`,
   where there is no narrowing); **hip**: the widest girth between the thighs and the waist
   (:func:`torso_levels`). Calf and ankle: the widest / narrowest leg girths; knee: the middle of
-  the kneecap, where the girth has grown by ``KNEE_RISE`` above the narrowing under it
-  (:func:`leg_levels`).
+  the narrow stretch above the calf (:func:`leg_levels`).
 * Validated on MakeHuman's population against its own measuring loops and ISO 8559-1 levels
   measured independently (``benchmarks/landmarks.py``, ``tests/test_population_landmarks.py``).
 * **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
@@ -81,10 +80,12 @@ CHIN_BAND, CHIN_JUMP, CHIN_STEP = 0.015, 0.006, 0.0025
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
-#: The knee (the middle of the kneecap) is where, going up from the narrowing under it, the leg's
-#: tape girth has grown by this share: calibrated on MakeHuman's knee measuring loop
-#: (``benchmarks/landmarks.py``: 3.4–6 % above the narrowing on its woman, man and heavy man).
-KNEE_RISE = 0.05
+#: The knee: the middle of the narrow stretch between the calf and the crotch, where the leg's
+#: tape girth is within this ratio of its minimum there (a smooth knee has a plateau, not a
+#: sharp minimum). (A rule calibrated on MakeHuman's knee measuring loop — the girth risen 5 %
+#: above the narrowing — was tried and dropped: fitted to the reference it is checked against,
+#: and 6.3 cm above the rig's knee joint on the base mesh.)
+KNEE_PLATEAU = 1.02
 #: :func:`extreme`: a girth within this share of the narrowest (widest) ...
 PLATEAU = 0.005
 #: ... over more than this height [m] has no apparent extreme: the middle of it is taken
@@ -557,8 +558,8 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
       narrowing under the knee (the narrowest girth from 2 % of the stature above the widest
       girth below the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature, up to 5 %
       of it under the crotch);
-    * knee: the middle of the kneecap — going up from that narrowing, where the girth has grown
-      by :data:`KNEE_RISE` (ISO 8559-1 knee girth: at the middle of the patella);
+    * knee: the middle of the narrow stretch above the calf (girth within :data:`KNEE_PLATEAU`
+      of its minimum there);
     * ankle: the narrowest girth between 3 % of the stature and 3 % under the calf (ISO
       8559-1: the minimum girth above the malleoli);
     * thigh: 3.5 % of the stature under the crotch.
@@ -593,15 +594,9 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
     if leg[calf] > CALF_BULGE * leg[float(calf_range[-1])]:
         above = within(calf + 0.02 * H, crotch - 0.05 * H)
         g = girths(above)
-        k = int(np.argmin(g))
-        rise = np.flatnonzero(g[k:] >= (1.0 + KNEE_RISE) * g[k])
-        if len(rise):  # interpolated between the sections either side
-            j = k + int(rise[0])
-            za, zb, ga, gb = above[j - 1], above[j], g[j - 1], g[j]
-            knee = float(za + (zb - za) * ((1.0 + KNEE_RISE) * g[k] - ga) / (gb - ga))
-        else:
-            knee = float(above[-1])
-        calf_range = within(0.12 * H, float(above[k]))
+        narrow = above[g <= KNEE_PLATEAU * g.min()]  # a smooth knee has a plateau, not a
+        knee = 0.5 * float(narrow[0] + narrow[-1])  # sharp minimum: its middle
+        calf_range = within(0.12 * H, float(narrow[0]))
         calf = extreme(calf_range, girths(calf_range), widest=True)
     else:
         knee = z_knee
