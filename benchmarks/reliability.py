@@ -364,6 +364,16 @@ def try_signals(b: Bench) -> None:
     q.send_signal(signal.SIGINT)
     p = finish(q, t0)
     record(b, k, "SIGINT twice", p, 130, [])
+    out = b.work / "sig-twice-launcher"
+    t0 = time.monotonic()
+    q = start(["run", str(b.scene), "-o", str(out)], ranks=2, launcher=True)
+    wait_for(out / FOLDER / "checkpoint" / "progress.json", q)
+    q.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    q.send_signal(signal.SIGINT)
+    p = finish(q, t0)
+    record(b, k, f"SIGINT twice, 2 ranks{LAUNCHER}", p, 130,
+           _signal_problems(p, out / FOLDER, True))  # fmt: skip
     _closed_stdout(b, 1)
     _closed_stdout(b, 2, launcher=True)
 

@@ -32,6 +32,7 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -107,13 +108,20 @@ def _received_signal(signum: int, source: str) -> None:
         return
     _received.add((signum, source))
     if _pending:  # a second signal before the next poll: at once
-        _stop_now(signum)
+        _stop_now(signum, everywhere=source == "relay")
     _pending = signum
 
 
-def _stop_now(signum: int) -> None:
+#: Seconds a rank other than 0 waits before it ends, when every rank stops at once: rank 0
+#: prints the line first (the launcher may end the job as soon as one rank has ended).
+STOP_DRAIN = 0.5
+
+
+def _stop_now(signum: int, everywhere: bool = False) -> None:
     """End the process (the job, on several ranks) with 128 + ``signum`` and one line, from the
-    signal handler: not by an exception, which could surface inside a PETSc callback."""
+    signal handler: not by an exception, which could surface inside a PETSc callback.
+    ``everywhere``: the signal was relayed by the launcher to every rank, so each ends by itself
+    and rank 0 alone prints the line (``MPI_Abort`` printed a line of its own on every rank)."""
     line = (f"interrupted by {signal_name(signum)} a second time {_stage}: stopped at once; "
             f"{continuation()}")  # fmt: skip
     for hook in ON_STOP:
@@ -125,7 +133,14 @@ def _stop_now(signum: int) -> None:
     if "mpi4py.MPI" in sys.modules:
         from mpi4py import MPI
 
-        if MPI.Is_initialized() and MPI.COMM_WORLD.size > 1:
+        several = MPI.Is_initialized() and MPI.COMM_WORLD.size > 1
+        if several and everywhere:
+            if MPI.COMM_WORLD.rank == 0:
+                print(f"error: {line}", file=sys.stderr, flush=True)
+            else:
+                time.sleep(STOP_DRAIN)
+            os._exit(code)
+        if several:
             print(f"error (rank {MPI.COMM_WORLD.rank}): {line}", file=sys.stderr, flush=True)
             MPI.COMM_WORLD.Abort(code)
     print(f"error: {line}", file=sys.stderr, flush=True)
