@@ -341,19 +341,19 @@ def build_parser() -> argparse.ArgumentParser:
         "every converged dressing step a checkpoint is written to <that folder>/checkpoint/; "
         "a run that was killed continues with `run --resume <that folder>` (same number of MPI "
         "ranks), which reads the folder's scene_used.toml and gives the same answer as an "
-        "uninterrupted run. Exit codes: 0 done; 1 internal error (a bug); 2 bad input or a "
-        "run refused before solving (one-line message); 3 the dressing did not converge (the "
+        "uninterrupted run. With -n N the command starts the N MPI ranks itself (through the "
+        "mpiexec next to the Python interpreter, or $MPIEXEC) and stays between them and the "
+        "terminal: the way to run on several ranks when the terminal may close or the output "
+        "is piped (`| head`, `| tee`); mpiexec run directly dies of a SIGHUP or of a closed "
+        "stdout and takes the ranks with it before they can report. Exit codes: 0 done; 1 "
+        "internal error (a bug); 2 bad input or a run refused before solving (one-line "
+        "message); 3 the dressing did not converge (the "
         "outputs of the last converged state are written); 4 done, but a result check "
         "(penetration, spring, force balance, contact area) failed: a WARNING each, see "
         "'checks' in summary.json; 5 a file could not be written (disk full, read-only "
         "folder; the line says what failed, run.json too): free space and --resume; 129, "
         "130, 143 stopped by SIGHUP, SIGINT (Ctrl-C), SIGTERM: the line names the stage "
-        'reached and the command that continues the run; run.json says "interrupted". '
-        "With -n N the command starts the N MPI ranks itself (through the mpiexec next to "
-        "the Python interpreter, or $MPIEXEC) and stays between them and the terminal: the way "
-        "to run on several ranks when the terminal may close or the output is piped (`| head`, "
-        "`| tee`). mpiexec run directly dies of a SIGHUP or of a closed stdout and takes the "
-        "ranks with it before they can report.",
+        'reached and the command that continues the run; run.json says "interrupted".',
     )
     p_run.add_argument("scene", nargs="?",
                        help="scene file, e.g. demos/cotton_gilet.toml (optional with --resume: "
