@@ -16,6 +16,11 @@ outputs, a resume to the reference answer) and is classified as
   accepted, a wrong status in ``run.json``, a partial file under a real name, a resume that
   failed or gave another answer.
 
+A 2-rank try runs ``mpiexec -n 2 fenics-garment …``, or, when its name says "by run -n 2",
+``fenics-garment run -n 2 …`` (the package's launcher, :mod:`fenics_garment.launcher`): the
+signals that end MPICH's ``mpiexec`` itself (SIGHUP, a closed stdout) are tried through the
+launcher only.
+
 Writes ``benchmarks/results/reliability.json`` and the table between the markers of
 ``docs/reliability.md``. Needs root for the small file systems (tmpfs, read-only bind mounts);
 without it those tries are skipped and listed as such.

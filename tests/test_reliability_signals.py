@@ -315,3 +315,21 @@ def test_the_launcher_outlives_a_closed_stdout(whole, tmp_path):
     assert p.stderr.read() == ""
     assert json.loads((folder / "run.json").read_text())["status"] == "completed"
     assert _regions(folder) == regions(2)
+
+
+@pytest.mark.slow
+def test_a_second_signal_to_the_launcher_stops_both_ranks_at_once(whole, tmp_path):
+    """Ctrl-C twice: the launcher passes both on; every rank ends at once by itself (no
+    MPI_Abort, which printed a line of its own on each rank), rank 0 prints the one line."""
+    scene, _ = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    _after_first_checkpoint(p, folder)
+    p.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    assert p.returncode == 130 and len(lines) == 1, err
+    assert lines[0].startswith("error: interrupted by SIGINT a second time while"), err
+    assert json.loads((folder / "run.json").read_text())["status"] == "interrupted"
