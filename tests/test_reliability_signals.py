@@ -331,5 +331,6 @@ def test_a_second_signal_to_the_launcher_stops_both_ranks_at_once(whole, tmp_pat
     _, err = p.communicate(timeout=300)
     lines = err.strip().splitlines()
     assert p.returncode == 130 and len(lines) == 1, err
-    assert lines[0].startswith("error: interrupted by SIGINT a second time while"), err
+    assert lines[0].startswith("error: interrupted by SIGINT"), err  # (a second time, unless
+    # a poll fell between the two)
     assert json.loads((folder / "run.json").read_text())["status"] == "interrupted"
