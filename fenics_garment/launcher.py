@@ -45,6 +45,8 @@ RANK_VARIABLES = ("PMI_RANK", "PMI_SIZE", "OMPI_COMM_WORLD_SIZE", "PMIX_RANK")
 #: Seconds the launcher holds a signal waiting for the ranks' handlers; after that it relays it
 #: anyway (rank 0 on another node cannot write the launcher's folder).
 READY_LIMIT = 300.0
+#: The same when no temporary folder could be made for rank 0 to write in.
+READY_GUESS = 30.0
 #: Seconds the relays may take to pass the job's last output on after it ended.
 DRAIN = 10.0
 #: Exit code of a launch that could not start (no ``mpiexec``): refused, as bad input.
@@ -119,15 +121,15 @@ def _say(line: str) -> None:
 class _Job:
     """The launched job and the signals the launcher received."""
 
-    def __init__(self, folder: Path, started: float):
-        self.folder, self.started = folder, started
+    def __init__(self, folder: Path, started: float, limit: float = READY_LIMIT):
+        self.folder, self.started, self.limit = folder, started, limit
         self.proc: subprocess.Popen | None = None
         self.held = 0  # a signal received before the ranks were ready
         self.relayed = 0  # signals passed on
         self.stopped = 0  # the signal that made the launcher stop the job at once
 
     def ready(self) -> bool:
-        late = time.monotonic() - self.started > READY_LIMIT
+        late = time.monotonic() - self.started > self.limit
         return late or (self.folder / interrupt.READY).exists()
 
     def on_signal(self, signum: int, frame: object) -> None:
@@ -170,8 +172,11 @@ def launch(ranks: int, argv: Sequence[str]) -> int:
     except LaunchError as err:
         _say(str(err))
         return EXIT_REFUSED
-    folder = Path(tempfile.mkdtemp(prefix="fenics-garment-launch-"))
-    job = _Job(folder, time.monotonic())
+    try:
+        folder, limit = Path(tempfile.mkdtemp(prefix="fenics-garment-launch-")), READY_LIMIT
+    except OSError:  # no temporary folder: the ranks cannot say they are ready; guess
+        folder, limit = Path(os.devnull), READY_GUESS
+    job = _Job(folder, time.monotonic(), limit)
     saved = {s: signal.getsignal(s) for s in interrupt.SIGNALS}
     for s in interrupt.SIGNALS:
         signal.signal(s, job.on_signal)
@@ -200,7 +205,8 @@ def launch(ranks: int, argv: Sequence[str]) -> int:
     finally:
         for s, handler in saved.items():
             signal.signal(s, handler)
-        shutil.rmtree(folder, ignore_errors=True)
+        if folder.is_dir():
+            shutil.rmtree(folder, ignore_errors=True)
     return _exit_code(job, code, ranks, argv)
 
 
