@@ -207,7 +207,8 @@ def whole(tmp_path_factory):
 
 
 HYDRA = pytest.mark.xfail(strict=True, reason="MPICH's mpiexec (hydra) does not pass SIGHUP on: "
-                         "it ends, and its proxies kill the ranks")  # fmt: skip
+                         "it ends, and its proxies kill the ranks (`fenics-garment run -n 2` "
+                         "does pass it on: test_the_launcher_passes_a_signal_on_…)")  # fmt: skip
 SIGNAL_RANKS = [(signal.SIGINT, 1), (signal.SIGTERM, 1), (signal.SIGHUP, 1), (signal.SIGINT, 2),
                 (signal.SIGTERM, 2), pytest.param(signal.SIGHUP, 2, marks=HYDRA)]  # fmt: skip
 
