@@ -344,7 +344,8 @@ def try_signals(b: Bench) -> None:
         p = _interrupt(b, out, sig, ranks=2, target=rank_pids, launcher=launcher)
         record(b, k, f"{sig.name} to rank 1 of 2 only{how}", p, 128 + sig,
                _signal_problems(p, out / FOLDER, True))  # fmt: skip
-    for sig, what in ((signal.SIGHUP, "terminal closed"), (signal.SIGTERM, "a process-tree kill")):
+    for sig, what in ((signal.SIGHUP, "terminal closed"), (signal.SIGTERM, "a process-tree kill"),
+                      (signal.SIGINT, "a process-tree kill")):  # fmt: skip
         out = b.work / f"sig-job-{sig.name}"
         p = _interrupt(b, out, sig, ranks=2, target=job_pids, launcher=True)
         record(b, k, f"{sig.name} to the whole job ({what}), 2 ranks{LAUNCHER}", p, 128 + sig,

@@ -21,8 +21,9 @@ Under the package's launcher (``fenics-garment run -n N``, :mod:`fenics_garment.
 ranks also take the launcher's relayed signals (:data:`RELAYED`: MPICH's ``mpiexec`` passes
 SIGQUIT, SIGALRM and SIGUSR1 on to every rank, but not SIGHUP), each standing for the signal the
 launcher received. A signal that reaches a rank both directly and through the launcher (a kill
-of the whole process tree) counts once; :func:`announce_ready` tells the launcher when every rank
-has its handlers, so that it holds a signal received before rather than kill a starting rank.
+of the whole process tree) counts once, and so does one received directly again;
+:func:`announce_ready` tells the launcher when every rank has its handlers, so that it holds a
+signal received before rather than kill a starting rank.
 """
 
 from __future__ import annotations
@@ -99,14 +100,17 @@ def _relay_handler(relay: int, frame: object) -> None:
 
 
 def _received_signal(signum: int, source: str) -> None:
-    """Set the flag, or stop at once on a second signal; the same signal received both directly
-    and through the launcher (every process of the job signalled) is one signal."""
+    """Set the flag, or stop at once on a second signal. Under the launcher, the same signal
+    received again directly, or through the launcher after directly, is the same signal: a kill
+    of the whole process tree reaches a rank directly, through ``mpiexec`` (which passes SIGINT
+    and SIGTERM on) and through the launcher; a second signal is the launcher's to pass on."""
     global _pending
-    twin = (signum, "relay" if source == "direct" else "direct")
-    if twin in _received and (signum, source) not in _received:
-        _received.add((signum, source))
-        return
+    seen = {s for s, _ in _received}
+    twin = (signum, "direct") in _received and (signum, "relay") not in _received
+    again = launched() and source == "direct" and signum in seen
     _received.add((signum, source))
+    if (source == "relay" and twin) or again:
+        return
     if _pending:  # a second signal before the next poll: at once
         _stop_now(signum, everywhere=source == "relay")
     _pending = signum

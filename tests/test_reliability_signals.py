@@ -61,6 +61,12 @@ def test_a_signal_both_relayed_and_direct_counts_once(handlers, monkeypatch):
     with pytest.raises(interrupt.Interrupted) as caught:
         interrupt.poll(MPI.COMM_SELF)
     assert caught.value.code == 129
+    os.kill(os.getpid(), signal.SIGTERM)  # a kill of the process tree: directly, through
+    os.kill(os.getpid(), signal.SIGTERM)  # mpiexec and through the launcher: one signal
+    os.kill(os.getpid(), interrupt.RELAY[signal.SIGTERM])
+    with pytest.raises(interrupt.Interrupted) as caught:
+        interrupt.poll(MPI.COMM_SELF)
+    assert caught.value.code == 143
     for s in interrupt.RELAYED:
         signal.signal(s, signal.SIG_DFL)
 
@@ -277,16 +283,16 @@ def _resumed_to_the_same_answer(folder: Path, regions) -> None:
 
 
 LAUNCHER_SIGNALS = [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIGHUP, False),
-                    (signal.SIGHUP, True)]  # fmt: skip
+                    (signal.SIGHUP, True), (signal.SIGTERM, True)]  # fmt: skip
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("sig, whole_job", LAUNCHER_SIGNALS)
 def test_the_launcher_passes_a_signal_on_and_the_run_resumes(whole, tmp_path, sig, whole_job):
-    """A signal to ``fenics-garment run -n 2`` (or SIGHUP to every process of the job, as a
-    closed terminal might send it) stops both ranks at their next step: exit 128 + s, the one
-    line with the launcher's --resume command, run.json "interrupted"; the resume gives the
-    answer of an uninterrupted run."""
+    """A signal to ``fenics-garment run -n 2`` (or to every process of the job, as a closed
+    terminal or a kill of the process tree might send it) stops both ranks at their next step:
+    exit 128 + s, the one line with the launcher's --resume command, run.json "interrupted";
+    the resume gives the answer of an uninterrupted run."""
     scene, regions = whole
     folder = tmp_path / "tube-on-cylinder"
     p = _launch([str(scene), "-o", str(tmp_path)])
