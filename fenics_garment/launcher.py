@@ -231,6 +231,6 @@ def _exit_code(job: _Job, code: int, ranks: int, argv: Sequence[str]) -> int:
     if code < 0:
         name = interrupt.signal_name(-code)
         _say(f"mpiexec was ended by {name}, and with it the ranks; a run continues from its last "
-             "checkpoint with `fenics-garment run -n N --resume FOLDER`")  # fmt: skip
+             f"checkpoint with `fenics-garment run -n {ranks} --resume FOLDER`")  # fmt: skip
         return 128 - code
     return code
