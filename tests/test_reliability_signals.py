@@ -341,3 +341,20 @@ def test_a_second_signal_to_the_launcher_stops_both_ranks_at_once(whole, tmp_pat
     assert lines[0].startswith("error: interrupted by SIGINT"), err  # (a second time, unless
     # a poll fell between the two)
     assert json.loads((folder / "run.json").read_text())["status"] == "interrupted"
+
+
+@pytest.mark.slow
+def test_the_launcher_reports_a_killed_mpiexec(whole, tmp_path):
+    """mpiexec itself killed (SIGKILL: nothing can be passed on): the launcher says so, with the
+    command that continues the run, and exits 128 + 9; the run resumes."""
+    scene, regions = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    _after_first_checkpoint(p, folder)
+    os.kill(int(_children(p.pid)[0]), signal.SIGKILL)  # the launcher's only child: mpiexec
+    _, err = p.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    assert p.returncode == 137 and len(lines) == 1, err
+    assert lines[0].startswith("error: mpiexec was ended by SIGKILL"), err
+    assert "`fenics-garment run -n 2 --resume FOLDER`" in lines[0]
+    _resumed_to_the_same_answer(folder, regions)
