@@ -287,7 +287,9 @@ LAUNCHER_SIGNALS = [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIG
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("sig, whole_job", LAUNCHER_SIGNALS)
+@pytest.mark.parametrize("sig, whole_job", LAUNCHER_SIGNALS,
+                         ids=lambda v: v.name if isinstance(v, signal.Signals) else
+                         ("whole-job" if v else "launcher"))  # fmt: skip
 def test_the_launcher_passes_a_signal_on_and_the_run_resumes(whole, tmp_path, sig, whole_job):
     """A signal to ``fenics-garment run -n 2`` (or to every process of the job, as a closed
     terminal or a kill of the process tree might send it) stops both ranks at their next step:
