@@ -16,6 +16,11 @@ outputs, a resume to the reference answer) and is classified as
   accepted, a wrong status in ``run.json``, a partial file under a real name, a resume that
   failed or gave another answer.
 
+A 2-rank try runs ``mpiexec -n 2 fenics-garment …``, or, when its name says "by run -n 2",
+``fenics-garment run -n 2 …`` (the package's launcher, :mod:`fenics_garment.launcher`): the
+signals that end MPICH's ``mpiexec`` itself (SIGHUP, a closed stdout) are tried through the
+launcher only.
+
 Writes ``benchmarks/results/reliability.json`` and the table between the markers of
 ``docs/reliability.md``. Needs root for the small file systems (tmpfs, read-only bind mounts);
 without it those tries are skipped and listed as such.
@@ -92,15 +97,20 @@ def _env(**changes: str | None) -> dict[str, str]:
     return env
 
 
-def _command(args: list[str], ranks: int) -> list[str]:
+def _command(args: list[str], ranks: int, launcher: bool = False) -> list[str]:
+    """The command of a try: ``mpiexec -n N fenics-garment …`` on several ranks, or, with
+    ``launcher``, ``fenics-garment run -n N …`` (the package starts mpiexec itself)."""
     cli = [sys.executable, "-m", "fenics_garment.cli", *args]
+    if launcher:
+        return [*cli[:4], "-n", str(ranks), *cli[4:]]
     return [str(BIN / "mpiexec"), "-n", str(ranks), *cli] if ranks > 1 else cli
 
 
-def start(args: list[str], *, ranks: int = 1, env: dict | None = None, **kw) -> subprocess.Popen:
-    return subprocess.Popen(_command(args, ranks), env=env or _env(), stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, errors="replace",
-                            start_new_session=True, **kw)  # fmt: skip
+def start(args: list[str], *, ranks: int = 1, env: dict | None = None, launcher: bool = False,
+          **kw) -> subprocess.Popen:  # fmt: skip
+    return subprocess.Popen(_command(args, ranks, launcher), env=env or _env(),
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            errors="replace", start_new_session=True, **kw)  # fmt: skip
 
 
 def finish(p: subprocess.Popen, t0: float, timeout: float = TIMEOUT) -> Proc:
@@ -217,9 +227,10 @@ def same_answer(b: Bench, folder: Path, ranks: int) -> list[str]:
     return [] if same else ["the answer differs from the uninterrupted run's"]
 
 
-def resume_check(b: Bench, folder: Path, ranks: int, env: dict | None = None) -> list[str]:
+def resume_check(b: Bench, folder: Path, ranks: int, env: dict | None = None,
+                 launcher: bool = False) -> list[str]:  # fmt: skip
     """Resume ``folder`` and compare its answer with the reference (problems, or [])."""
-    p = run(["run", "-q", "--resume", str(folder)], ranks=ranks, env=env)
+    p = run(["run", "-q", "--resume", str(folder)], ranks=ranks, env=env, launcher=launcher)
     if p.code != 0:
         return [f"resume exit {p.code}: {' '.join(error_lines(p.err))[:120]}"]
     return same_answer(b, folder, ranks)
@@ -239,11 +250,12 @@ def reference(b: Bench, ranks: int) -> str:
 
 # -- signals ----------------------------------------------------------------------------------
 def _interrupt(b: Bench, out: Path, sig: int, *, ranks: int = 1, when: str = "checkpoint",
-               target: Callable[[subprocess.Popen], list[int]] | None = None) -> Proc:  # fmt: skip
+               target: Callable[[subprocess.Popen], list[int]] | None = None,
+               launcher: bool = False) -> Proc:  # fmt: skip
     """A run sent ``sig`` (to the launcher or to ``target``'s pids) after its first checkpoint
-    (or ``when`` seconds after the start)."""
+    (or ``when`` seconds after the start); ``launcher``: started as ``run -n N``."""
     t0 = time.monotonic()
-    p = start(["run", str(b.scene), "-o", str(out)], ranks=ranks)
+    p = start(["run", str(b.scene), "-o", str(out)], ranks=ranks, launcher=launcher)
     if when == "checkpoint":
         wait_for(out / FOLDER / "checkpoint" / "progress.json", p)
     else:
@@ -308,26 +320,41 @@ def _signal_problems(p: Proc, folder: Path, checkpoint: bool) -> list[str]:
     return problems
 
 
+#: How a 2-rank try is started: MPICH's mpiexec run directly (SIGHUP and a closed stdout end it
+#: and its ranks: a limit of that launcher, not tried), or the package's launcher.
+LAUNCHER = " by run -n 2"
+
+
 def try_signals(b: Bench) -> None:
     k = "signals"
-    for ranks in (1, 2):
-        for sig in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP):
-            out = b.work / f"sig-{ranks}-{sig.name}"
-            p = _interrupt(b, out, sig, ranks=ranks)
+    every = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+    for ranks, launcher, sigs in ((1, False, every), (2, False, every[:2]), (2, True, every)):
+        how = LAUNCHER if launcher else ""
+        for sig in sigs:
+            out = b.work / f"sig-{ranks}-{sig.name}{'-launcher' if launcher else ''}"
+            p = _interrupt(b, out, sig, ranks=ranks, launcher=launcher)
             problems = _signal_problems(p, out / FOLDER, True)
             if p.code == 128 + sig and not problems:
-                problems = resume_check(b, out / FOLDER, ranks)
-            record(b, k, f"{sig.name} after a checkpoint, {ranks} rank(s), resume", p, 128 + sig,
-                   problems)  # fmt: skip
-    for sig in (signal.SIGTERM, signal.SIGINT):
-        out = b.work / f"sig-one-rank-{sig.name}"
-        p = _interrupt(b, out, sig, ranks=2, target=rank_pids)
-        record(b, k, f"{sig.name} to rank 1 of 2 only", p, 128 + sig,
+                problems = resume_check(b, out / FOLDER, ranks, launcher=launcher)
+            record(b, k, f"{sig.name} after a checkpoint, {ranks} rank(s){how}, resume", p,
+                   128 + sig, problems)  # fmt: skip
+    for sig, launcher in ((signal.SIGTERM, False), (signal.SIGINT, False), (signal.SIGTERM, True)):
+        how = LAUNCHER if launcher else ""
+        out = b.work / f"sig-one-rank-{sig.name}{'-launcher' if launcher else ''}"
+        p = _interrupt(b, out, sig, ranks=2, target=rank_pids, launcher=launcher)
+        record(b, k, f"{sig.name} to rank 1 of 2 only{how}", p, 128 + sig,
                _signal_problems(p, out / FOLDER, True))  # fmt: skip
-    out = b.work / "sig-hup-job"
-    p = _interrupt(b, out, signal.SIGHUP, ranks=2, target=job_pids)
-    record(b, k, "SIGHUP to the whole job (terminal closed), 2 ranks", p, 129,
-           _signal_problems(p, out / FOLDER, True))  # fmt: skip
+    for sig, what in ((signal.SIGHUP, "terminal closed"), (signal.SIGTERM, "a process-tree kill"),
+                      (signal.SIGINT, "a process-tree kill")):  # fmt: skip
+        out = b.work / f"sig-job-{sig.name}"
+        p = _interrupt(b, out, sig, ranks=2, target=job_pids, launcher=True)
+        record(b, k, f"{sig.name} to the whole job ({what}), 2 ranks{LAUNCHER}", p, 128 + sig,
+               _signal_problems(p, out / FOLDER, True))  # fmt: skip
+    out = b.work / "sig-early-launcher"
+    p = _interrupt(b, out, signal.SIGINT, ranks=2, when="1.5", launcher=True)
+    problems = [] if p.code == 0 else _signal_problems(p, out / FOLDER, False)
+    record(b, k, f"SIGINT 1.5 s after the start (ranks starting), 2 ranks{LAUNCHER}", p,
+           130 if p.code else 0, problems)  # fmt: skip
     for when in ("2.5", "5"):
         out = b.work / f"sig-early-{when}"
         p = _interrupt(b, out, signal.SIGINT, when=when)
@@ -343,15 +370,25 @@ def try_signals(b: Bench) -> None:
     q.send_signal(signal.SIGINT)
     p = finish(q, t0)
     record(b, k, "SIGINT twice", p, 130, [])
-    for ranks in (1, 2):
-        _closed_stdout(b, ranks)
+    out = b.work / "sig-twice-launcher"
+    t0 = time.monotonic()
+    q = start(["run", str(b.scene), "-o", str(out)], ranks=2, launcher=True)
+    wait_for(out / FOLDER / "checkpoint" / "progress.json", q)
+    q.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    q.send_signal(signal.SIGINT)
+    p = finish(q, t0)
+    record(b, k, f"SIGINT twice, 2 ranks{LAUNCHER}", p, 130,
+           _signal_problems(p, out / FOLDER, True))  # fmt: skip
+    _closed_stdout(b, 1)
+    _closed_stdout(b, 2, launcher=True)
 
 
-def _closed_stdout(b: Bench, ranks: int) -> None:
+def _closed_stdout(b: Bench, ranks: int, launcher: bool = False) -> None:
     """The run's reader goes away after the first line, as ``| head -1`` does."""
     out = b.work / f"sig-pipe-{ranks}"
     t0 = time.monotonic()
-    q = start(["run", str(b.scene), "-o", str(out)], ranks=ranks)
+    q = start(["run", str(b.scene), "-o", str(out)], ranks=ranks, launcher=launcher)
     q.stdout.readline()
     q.stdout.close()
     try:
@@ -363,8 +400,9 @@ def _closed_stdout(b: Bench, ranks: int) -> None:
     problems = same_answer(b, out / FOLDER, ranks)
     if status(out / FOLDER).get("status") != "completed":
         problems.append("run.json not completed")
-    record(b, "signals", f"stdout closed by its reader (as head -1 does), {ranks} rank(s)", p, 0,
-           problems)  # fmt: skip
+    how = LAUNCHER if launcher else ""
+    record(b, "signals", f"stdout closed by its reader (as head -1 does), {ranks} rank(s){how}",
+           p, 0, problems)  # fmt: skip
 
 
 # -- checkpoints that lie ---------------------------------------------------------------------

@@ -3,6 +3,8 @@
 
 ``main(argv) -> int`` is the whole program so that tests call it directly. Messages are printed
 on rank 0 only; every rank runs the same commands so the program works under ``mpiexec -n N``.
+``run -n N`` started outside an MPI job is the package's launcher
+(:mod:`fenics_garment.launcher`): it starts ``mpiexec -n N`` with the same arguments itself.
 """
 
 from __future__ import annotations
@@ -92,7 +94,11 @@ def _input_errors() -> tuple[type[Exception], ...]:
     from fenics_garment.scene.preflight import PreflightError
 
     return (SceneError, ScanError, MaterialError, PreflightError, ResumeError, GeometryError,
-            PetscOptionError)  # fmt: skip
+            PetscOptionError, _RanksError)  # fmt: skip
+
+
+class _RanksError(ValueError):
+    """``run -n N`` inside a job of another size (an input error: exit 2)."""
 
 
 #: Characters of an error line (an echoed value is cut well before; this is the last guard).
@@ -118,9 +124,12 @@ def continuation(args: argparse.Namespace, folder: Path | str | None) -> str:
     import shlex
 
     from fenics_garment._stack import MPI
+    from fenics_garment.interrupt import launched
 
     n = MPI.COMM_WORLD.size
     launch = f"mpiexec -n {n} fenics-garment run" if n > 1 else "fenics-garment run"
+    if launched():  # started by `fenics-garment run -n N`: continued the same way
+        launch = f"fenics-garment run -n {n}"
     if folder is not None:
         return f"continue with `{launch} --resume {shlex.quote(str(folder))}`"
     scene = shlex.quote(str(args.scene)) if getattr(args, "scene", None) else "SCENE"
@@ -145,6 +154,7 @@ def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
 
     mpi_guard.setup()
     interrupt.install()  # after the stack: PETSc's own handlers abort with code 59
+    interrupt.announce_ready(MPI.COMM_WORLD)  # (to the launcher of `run -n N`, if any)
     if MPI.COMM_WORLD.rank == 0:
         for warning in warnings:
             print(f"warning: {warning}", file=sys.stderr, flush=True)
@@ -176,6 +186,22 @@ def _run_guarded(args: argparse.Namespace, warnings: Sequence[str] = ()) -> int:
             "please report it; FENICS_GARMENT_TRACEBACK=1 shows the traceback)")  # fmt: skip
 
 
+def _ranks(text: str) -> int:
+    """``-n N``: a number of MPI ranks (argparse type)."""
+    try:
+        n = int(text)
+    except ValueError:
+        n = 0
+    if not 1 <= n <= MAX_RANKS:
+        raise argparse.ArgumentTypeError(f"a number of ranks from 1 to {MAX_RANKS}, not "
+                                         f"{text[:40]!r}")  # fmt: skip
+    return n
+
+
+#: The most ranks ``run -n`` starts.
+MAX_RANKS = 4096
+
+
 def _load_scene(args: argparse.Namespace):
     """The scene of ``run``: SCENE, or the resumed folder's scene_used.toml."""
     from fenics_garment.scene import config
@@ -205,6 +231,11 @@ def _cmd_run(args: argparse.Namespace) -> int:
     from fenics_garment._stack import MPI
     from fenics_garment.scene.run import exit_code, run
 
+    size = MPI.COMM_WORLD.size
+    if args.ranks is not None and args.ranks != size:
+        raise _RanksError(f"-n {args.ranks}: this job has {size} MPI rank(s); under mpiexec "
+                          "leave -n out (or give the job's size), or start `fenics-garment run "
+                          "-n N …` by itself: it starts mpiexec")  # fmt: skip
     scene = _load_scene(args)
     interrupt.continuation = lambda: continuation(args, _resumable(args, scene))
     if args.error_bars:
@@ -317,8 +348,13 @@ def build_parser() -> argparse.ArgumentParser:
         "every converged dressing step a checkpoint is written to <that folder>/checkpoint/; "
         "a run that was killed continues with `run --resume <that folder>` (same number of MPI "
         "ranks), which reads the folder's scene_used.toml and gives the same answer as an "
-        "uninterrupted run. Exit codes: 0 done; 1 internal error (a bug); 2 bad input or a "
-        "run refused before solving (one-line message); 3 the dressing did not converge (the "
+        "uninterrupted run. With -n N the command starts the N MPI ranks itself (through the "
+        "mpiexec next to the Python interpreter, or $MPIEXEC) and stays between them and the "
+        "terminal: the way to run on several ranks when the terminal may close or the output "
+        "is piped (`| head`, `| tee`); mpiexec run directly dies of a SIGHUP or of a closed "
+        "stdout and takes the ranks with it before they can report. Exit codes: 0 done; 1 "
+        "internal error (a bug); 2 bad input or a run refused before solving (one-line "
+        "message); 3 the dressing did not converge (the "
         "outputs of the last converged state are written); 4 done, but a result check "
         "(penetration, spring, force balance, contact area) failed: a WARNING each, see "
         "'checks' in summary.json; 5 a file could not be written (disk full, read-only "
@@ -333,6 +369,11 @@ def build_parser() -> argparse.ArgumentParser:
                        help="output root (default: the scene's output.folder); "
                        "the run writes <root>/<scene name>/")  # fmt: skip
     p_run.add_argument("-q", "--quiet", action="store_true", help="no progress output")
+    p_run.add_argument("-n", "--ranks", type=_ranks, default=None, metavar="N",
+                       help="run on N MPI ranks, started by this command (it outlives a closed "
+                       "terminal and a closed stdout, passes Ctrl-C, SIGTERM and SIGHUP on to "
+                       "the ranks, which stop at their next step with the --resume line, and "
+                       "exits with their code); under mpiexec -n N it must be N")  # fmt: skip
     p_run.add_argument("--resume", metavar="FOLDER", default=None,
                        help="continue the interrupted run whose output folder is FOLDER "
                        "(<root>/<scene name>/) from its last checkpoint")  # fmt: skip
@@ -388,6 +429,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.command is None:
         parser.print_help()
         return 0
+    if getattr(args, "ranks", None) is not None:
+        from fenics_garment import launcher
+
+        if not launcher.inside_job():  # the launcher: mpiexec -n N runs this command again
+            return launcher.launch(args.ranks, list(sys.argv[1:] if argv is None else argv))
     from fenics_garment import environment, interrupt
 
     warnings = environment.prepare()  # before the stack is loaded (HOME, JIT cache, backend)

@@ -16,6 +16,14 @@ in its Python API): the geometry code calls :func:`reinstall` after every gmsh s
 A closed stdout (``fenics-garment run … | head``) raised SIGPIPE, which killed the run without a
 word; :func:`install` ignores SIGPIPE and :func:`tolerate_closed_output` sends what can no
 longer be printed to ``/dev/null``, so the run goes on and writes its outputs.
+
+Under the package's launcher (``fenics-garment run -n N``, :mod:`fenics_garment.launcher`) the
+ranks also take the launcher's relayed signals (:data:`RELAYED`: MPICH's ``mpiexec`` passes
+SIGQUIT, SIGALRM and SIGUSR1 on to every rank, but not SIGHUP), each standing for the signal the
+launcher received. A signal that reaches a rank both directly and through the launcher (a kill
+of the whole process tree) counts once, and so does one received directly again;
+:func:`announce_ready` tells the launcher when every rank has its handlers, so that it holds a
+signal received before rather than kill a starting rank.
 """
 
 from __future__ import annotations
@@ -25,14 +33,29 @@ import os
 import signal
 import sys
 import threading
+import time
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any
 
 #: The signals that stop a run cleanly.
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
+#: The launcher's relay: the signal it sends ``mpiexec`` (which passes it on to every rank) for
+#: each signal it receives. MPICH's ``mpiexec`` passes SIGINT, SIGQUIT, SIGTERM, SIGALRM and
+#: SIGUSR1 on, not SIGHUP, and a second SIGINT makes it kill the job: none is relayed as itself,
+#: so that a rank tells the launcher's signal from one sent to it directly.
+RELAY = {signal.SIGINT: signal.SIGQUIT, signal.SIGTERM: signal.SIGALRM,
+         signal.SIGHUP: signal.SIGUSR1}  # fmt: skip
+RELAYED = {relay: signum for signum, relay in RELAY.items()}
+#: Set by the launcher for its ranks: the folder where rank 0 says that every rank is ready.
+LAUNCHER_ENV = "FENICS_GARMENT_LAUNCHER"
+#: The name of that file.
+READY = "ready"
 _pending = 0
 _installed = False
 _stage = "starting"
+#: (signal, "direct" or "relay") received so far.
+_received: set[tuple[int, str]] = set()
 
 
 class Interrupted(BaseException):  # (not Exception: no `except Exception` swallows it)
@@ -69,15 +92,40 @@ def continuation() -> str:
 
 
 def _handler(signum: int, frame: object) -> None:
+    _received_signal(signum, "direct")
+
+
+def _relay_handler(relay: int, frame: object) -> None:
+    _received_signal(RELAYED[relay], "relay")
+
+
+def _received_signal(signum: int, source: str) -> None:
+    """Set the flag, or stop at once on a second signal. Under the launcher, the same signal
+    received again directly, or through the launcher after directly, is the same signal: a kill
+    of the whole process tree reaches a rank directly, through ``mpiexec`` (which passes SIGINT
+    and SIGTERM on) and through the launcher; a second signal is the launcher's to pass on."""
     global _pending
+    seen = {s for s, _ in _received}
+    twin = (signum, "direct") in _received and (signum, "relay") not in _received
+    again = launched() and source == "direct" and signum in seen
+    _received.add((signum, source))
+    if (source == "relay" and twin) or again:
+        return
     if _pending:  # a second signal before the next poll: at once
-        _stop_now(signum)
+        _stop_now(signum, everywhere=source == "relay")
     _pending = signum
 
 
-def _stop_now(signum: int) -> None:
+#: Seconds a rank other than 0 waits before it ends, when every rank stops at once: rank 0
+#: prints the line first (the launcher may end the job as soon as one rank has ended).
+STOP_DRAIN = 0.5
+
+
+def _stop_now(signum: int, everywhere: bool = False) -> None:
     """End the process (the job, on several ranks) with 128 + ``signum`` and one line, from the
-    signal handler: not by an exception, which could surface inside a PETSc callback."""
+    signal handler: not by an exception, which could surface inside a PETSc callback.
+    ``everywhere``: the signal was relayed by the launcher to every rank, so each ends by itself
+    and rank 0 alone prints the line (``MPI_Abort`` printed a line of its own on every rank)."""
     line = (f"interrupted by {signal_name(signum)} a second time {_stage}: stopped at once; "
             f"{continuation()}")  # fmt: skip
     for hook in ON_STOP:
@@ -89,7 +137,14 @@ def _stop_now(signum: int) -> None:
     if "mpi4py.MPI" in sys.modules:
         from mpi4py import MPI
 
-        if MPI.Is_initialized() and MPI.COMM_WORLD.size > 1:
+        several = MPI.Is_initialized() and MPI.COMM_WORLD.size > 1
+        if several and everywhere:
+            if MPI.COMM_WORLD.rank == 0:
+                print(f"error: {line}", file=sys.stderr, flush=True)
+            else:
+                time.sleep(STOP_DRAIN)
+            os._exit(code)
+        if several:
             print(f"error (rank {MPI.COMM_WORLD.rank}): {line}", file=sys.stderr, flush=True)
             MPI.COMM_WORLD.Abort(code)
     print(f"error: {line}", file=sys.stderr, flush=True)
@@ -103,8 +158,29 @@ def install() -> None:
         return
     for s in SIGNALS:
         signal.signal(s, _handler)
+    if launched():
+        for relay in RELAYED:
+            signal.signal(relay, _relay_handler)
     signal.signal(signal.SIGPIPE, signal.SIG_IGN)
     _installed = True
+
+
+def launched() -> bool:
+    """Whether this process is a rank started by the package's launcher."""
+    return bool(os.environ.get(LAUNCHER_ENV))
+
+
+def announce_ready(comm: Any) -> None:
+    """Under the launcher: once every rank of ``comm`` has its handlers (collective), rank 0
+    says so in the launcher's folder; until then the launcher holds the signals it receives."""
+    if not launched():
+        return
+    comm.Barrier()
+    if comm.rank == 0:
+        try:
+            (Path(os.environ[LAUNCHER_ENV]) / READY).touch()
+        except OSError:  # another node's file system: the launcher stops waiting after a while
+            pass
 
 
 def reinstall() -> None:

@@ -3,7 +3,9 @@ rank 0 (the stage reached and the command that continues it), ``run.json`` "inte
 exit code 128 + the signal; the handlers survive gmsh; a closed stdout does not stop a run.
 
 The quick tests send the signal to this very process (in-process runs through ``cli.main``); the
-slow ones to real ``fenics-garment`` processes on 1 and 2 ranks, then resume them.
+slow ones to real ``fenics-garment`` processes on 1 and 2 ranks, then resume them, and to real
+``fenics-garment run -n 2`` launchers (the package starts mpiexec itself): a signal to the
+launcher, a SIGHUP to every process of the job (a closed terminal), a closed stdout.
 """
 
 import json
@@ -33,6 +35,7 @@ def handlers():
     interrupt.install()
     yield
     interrupt._pending, interrupt._installed = 0, False
+    interrupt._received.clear()
     for s, h in saved.items():
         signal.signal(s, h)
 
@@ -45,6 +48,58 @@ def test_a_signal_is_acted_on_at_the_next_poll_on_every_rank(handlers):
         interrupt.poll(MPI.COMM_SELF)
     assert caught.value.code == 129 and caught.value.stage == "while testing"
     interrupt.poll(MPI.COMM_SELF)  # acted on once
+
+
+def test_a_signal_both_relayed_and_direct_counts_once(handlers, monkeypatch):
+    """Under the launcher a rank takes SIGUSR1 for the launcher's SIGHUP; the same SIGHUP also
+    sent to the rank itself (every process of the job signalled) is not a second signal."""
+    monkeypatch.setenv(interrupt.LAUNCHER_ENV, "/nonexistent")
+    interrupt.install()
+    assert signal.getsignal(signal.SIGUSR1) is interrupt._relay_handler
+    os.kill(os.getpid(), interrupt.RELAY[signal.SIGHUP])
+    os.kill(os.getpid(), signal.SIGHUP)  # the twin: would stop the process if it counted
+    with pytest.raises(interrupt.Interrupted) as caught:
+        interrupt.poll(MPI.COMM_SELF)
+    assert caught.value.code == 129
+    os.kill(os.getpid(), signal.SIGTERM)  # a kill of the process tree: directly, through
+    os.kill(os.getpid(), signal.SIGTERM)  # mpiexec and through the launcher: one signal
+    os.kill(os.getpid(), interrupt.RELAY[signal.SIGTERM])
+    with pytest.raises(interrupt.Interrupted) as caught:
+        interrupt.poll(MPI.COMM_SELF)
+    assert caught.value.code == 143
+    for s in interrupt.RELAYED:
+        signal.signal(s, signal.SIG_DFL)
+
+
+def test_run_n_inside_a_job_of_another_size_is_refused(tmp_path, capsys, monkeypatch):
+    scene = tmp_path / "tube.toml"
+    scene.write_text(config.dumps(small_tube()))
+    monkeypatch.setenv("PMI_RANK", "0")  # a rank of a job: `-n` is only checked
+    saved = {s: signal.getsignal(s) for s in (*interrupt.SIGNALS, signal.SIGPIPE)}
+    try:
+        code = cli.main(["run", "-q", "-n", "3", str(scene), "-o", str(tmp_path)])
+    finally:
+        for s, h in saved.items():
+            signal.signal(s, h)
+    err = capsys.readouterr().err.strip()
+    assert code == 2 and err.startswith("error: -n 3: this job has 1 MPI rank(s)"), err
+    assert not (tmp_path / "tube-on-cylinder").exists()
+
+
+@pytest.mark.parametrize("n", ["0", "-2", "two", "5000"])
+def test_run_n_takes_a_number_of_ranks(n, capsys):
+    with pytest.raises(SystemExit) as caught:
+        cli.build_parser().parse_args(["run", "-n", n, "scene.toml"])
+    assert caught.value.code == 2 and "a number of ranks from 1 to" in capsys.readouterr().err
+
+
+def test_the_launcher_without_mpiexec_says_so(tmp_path):
+    env = {**os.environ, "PYTHONPATH": str(ROOT), "MPIEXEC": str(tmp_path / "no-mpiexec")}
+    p = subprocess.run([sys.executable, "-m", "fenics_garment.cli", "run", "-n", "2",
+                        str(tmp_path / "scene.toml")], env=env, capture_output=True, text=True,
+                       timeout=60)  # fmt: skip
+    assert p.returncode == 2 and p.stderr.startswith("error: could not start"), p.stderr
+    assert len(p.stderr.splitlines()) == 1
 
 
 def test_a_second_signal_stops_at_once(tmp_path):
@@ -158,7 +213,8 @@ def whole(tmp_path_factory):
 
 
 HYDRA = pytest.mark.xfail(strict=True, reason="MPICH's mpiexec (hydra) does not pass SIGHUP on: "
-                         "it ends, and its proxies kill the ranks")  # fmt: skip
+                         "it ends, and its proxies kill the ranks (`fenics-garment run -n 2` "
+                         "does pass it on: test_the_launcher_passes_a_signal_on_…)")  # fmt: skip
 SIGNAL_RANKS = [(signal.SIGINT, 1), (signal.SIGTERM, 1), (signal.SIGHUP, 1), (signal.SIGINT, 2),
                 (signal.SIGTERM, 2), pytest.param(signal.SIGHUP, 2, marks=HYDRA)]  # fmt: skip
 
@@ -200,3 +256,107 @@ def test_a_signal_to_one_rank_stops_both(whole, tmp_path):
 def _children(pid: int) -> list[str]:
     out = subprocess.run(["pgrep", "-P", str(pid)], capture_output=True, text=True).stdout
     return out.split() or [str(pid)]
+
+
+# -- the launcher: `fenics-garment run -n 2` (slow) -----------------------------------------------
+def _launch(args: list[str], ranks: int = 2) -> subprocess.Popen:
+    cmd = [sys.executable, "-m", "fenics_garment.cli", "run", "-n", str(ranks), *args]
+    return subprocess.Popen(cmd, env={**os.environ, "PYTHONPATH": str(ROOT)}, text=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            start_new_session=True)  # fmt: skip
+
+
+def _job(pid: int) -> list[int]:
+    """``pid`` and every process it started, directly or not (mpiexec, its proxy, the ranks)."""
+    found, todo = [], [pid]
+    while todo:
+        found.append(todo.pop())
+        out = subprocess.run(["pgrep", "-P", str(found[-1])], capture_output=True, text=True)
+        todo += [int(c) for c in out.stdout.split()]
+    return found
+
+
+def _resumed_to_the_same_answer(folder: Path, regions) -> None:
+    resumed = _launch(["-q", "--resume", str(folder)])
+    assert resumed.wait(timeout=600) == 0, resumed.stderr.read()
+    assert _regions(folder) == regions(2)
+
+
+LAUNCHER_SIGNALS = [(signal.SIGINT, False), (signal.SIGTERM, False), (signal.SIGHUP, False),
+                    (signal.SIGHUP, True), (signal.SIGTERM, True)]  # fmt: skip
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, whole_job", LAUNCHER_SIGNALS,
+                         ids=lambda v: v.name if isinstance(v, signal.Signals) else
+                         ("whole-job" if v else "launcher"))  # fmt: skip
+def test_the_launcher_passes_a_signal_on_and_the_run_resumes(whole, tmp_path, sig, whole_job):
+    """A signal to ``fenics-garment run -n 2`` (or to every process of the job, as a closed
+    terminal or a kill of the process tree might send it) stops both ranks at their next step:
+    exit 128 + s, the one line with the launcher's --resume command, run.json "interrupted";
+    the resume gives the answer of an uninterrupted run."""
+    scene, regions = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    _after_first_checkpoint(p, folder)
+    for pid in _job(p.pid) if whole_job else [p.pid]:
+        os.kill(pid, sig)
+    _, err = p.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    assert p.returncode == 128 + sig and len(lines) == 1, err
+    assert lines[0].startswith(f"error: interrupted by {sig.name} while dressing"), err
+    assert lines[0].endswith(f"continue with `fenics-garment run -n 2 --resume {folder}`"), err
+    state = json.loads((folder / "run.json").read_text())
+    assert state["status"] == "interrupted" and state["signal"] == sig.name
+    _resumed_to_the_same_answer(folder, regions)
+
+
+@pytest.mark.slow
+def test_the_launcher_outlives_a_closed_stdout(whole, tmp_path):
+    """``fenics-garment run -n 2 … | head -1``: the reader goes away, the run goes on to the
+    end and writes the same answer (mpiexec run directly died of SIGPIPE, and its ranks)."""
+    scene, regions = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    assert p.stdout.readline()
+    p.stdout.close()
+    assert p.wait(timeout=600) == 0, p.stderr.read()
+    assert p.stderr.read() == ""
+    assert json.loads((folder / "run.json").read_text())["status"] == "completed"
+    assert _regions(folder) == regions(2)
+
+
+@pytest.mark.slow
+def test_a_second_signal_to_the_launcher_stops_both_ranks_at_once(whole, tmp_path):
+    """Ctrl-C twice: the launcher passes both on; every rank ends at once by itself (no
+    MPI_Abort, which printed a line of its own on each rank), rank 0 prints the one line."""
+    scene, _ = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    _after_first_checkpoint(p, folder)
+    p.send_signal(signal.SIGINT)
+    time.sleep(0.05)
+    p.send_signal(signal.SIGINT)
+    _, err = p.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    assert p.returncode == 130 and len(lines) == 1, err
+    assert lines[0].startswith("error: interrupted by SIGINT"), err  # (a second time, unless
+    # a poll fell between the two)
+    assert json.loads((folder / "run.json").read_text())["status"] == "interrupted"
+
+
+@pytest.mark.slow
+def test_the_launcher_reports_a_killed_mpiexec(whole, tmp_path):
+    """mpiexec itself killed (SIGKILL: nothing can be passed on): the launcher says so, with the
+    command that continues the run, and exits 128 + 9; the run resumes."""
+    scene, regions = whole
+    folder = tmp_path / "tube-on-cylinder"
+    p = _launch([str(scene), "-o", str(tmp_path)])
+    _after_first_checkpoint(p, folder)
+    os.kill(int(_children(p.pid)[0]), signal.SIGKILL)  # the launcher's only child: mpiexec
+    _, err = p.communicate(timeout=300)
+    lines = err.strip().splitlines()
+    assert p.returncode == 137 and len(lines) == 1, err
+    assert lines[0].startswith("error: mpiexec was ended by SIGKILL"), err
+    assert "`fenics-garment run -n 2 --resume FOLDER`" in lines[0]
+    _resumed_to_the_same_answer(folder, regions)
