@@ -366,6 +366,12 @@ def _centre_of(levels: dict[str, tuple[float, Array]]) -> tuple[Array, Array]:
     return zs[order], cs[order]
 
 
+#: Largest height [m] between the rings a torso garment (gilet, dress) is lofted through: its
+#: landmark sections are joined by monotone interpolated rings (``mannequin.guide_rings``), so
+#: the loft cannot overshoot between unevenly spaced levels into the body or away from it
+TORSO_GUIDE = 0.02
+
+
 def _build(
     g: Any,
     kind: str,
@@ -391,7 +397,9 @@ def _build(
     if order not in (1, 2):
         raise ValueError(f"garment geometry order must be 1 or 2, got {order}")
     occ = g.model.occ
-    faces = [dt for dt in add_loft(g, levels, solid=False, max_degree=max_degree) if dt[0] == 2]
+    guide = TORSO_GUIDE if kind in ("gilet", "dress") else 0.0
+    loft = add_loft(g, levels, solid=False, max_degree=max_degree, guide=guide)
+    faces = [dt for dt in loft if dt[0] == 2]
     if cuts:
         tools = []
         for c in cuts:
