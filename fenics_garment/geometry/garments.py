@@ -771,6 +771,14 @@ def _y_mid(levels: dict[str, tuple[float, Array]]) -> float:
     return float(np.mean([sec[:, 1].mean() for _, sec in levels.values()]))
 
 
+#: How far inside the arm root (the vertical plane through the armpit) a segmented body's
+#: armhole begins [m], so that a torso garment clears the arm: measured on MakeHuman's bodies
+#: (:func:`armhole_clearance` ...)
+ARMHOLE_CLEARANCE = 0.015
+#: The narrowest shoulder strap left between the neck and the armhole [m]
+MIN_STRAP = 0.02
+
+
 def _top_cuts(
     body: BodySurface,
     levels: dict[str, tuple[float, Array]],
@@ -790,10 +798,24 @@ def _top_cuts(
     x_neck = nb[:, 0].max()
     z_bottom = z_uc - arm_drop
     if "armpit" in body.landmarks:  # a segmented body: the armhole reaches below the real armpit
-        z_bottom = min(z_bottom, body.landmarks["armpit"] - arm_drop)
+        drop = max(arm_drop, 2 * ARMHOLE_CLEARANCE)
+        z_bottom = min(z_bottom, body.landmarks["armpit"] - drop)
     zc = z_sh + 0.03
     cuts = []
     x_in = x_neck + strap
+    roots = [body.points.get(f"armpit_{side}") for side in ("left", "right")]
+    if all(r is not None and np.all(np.isfinite(r)) for r in roots):
+        # a segmented body: the armhole's inner edge ARMHOLE_CLEARANCE inside the arm roots
+        # (the planes through the armpits), the strap narrowed to what is left between it
+        # and the neck, so that the garment clears the arms
+        x_root = min(abs(float(r[0])) for r in roots)
+        x_in = min(x_in, x_root - ARMHOLE_CLEARANCE)
+        if x_in - x_neck < MIN_STRAP:
+            raise GeometryError(
+                f"no room for a shoulder strap: {(x_root - x_neck) * 100:.1f} cm from the base "
+                f"of the neck to the arm root, at least {(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} "
+                "cm needed; check the body's neck_base and armpit landmarks"
+            )
     ax = x_tip + 0.03 - x_in
     for s in (1.0, -1.0):
         root = body.points.get("arm_root_left" if s > 0 else "arm_root_right")
@@ -803,12 +825,16 @@ def _top_cuts(
             )
             continue
         # a segmented body (scan): the opening in the garment's plane (0.03 m inside the
-        # ellipsoid's centre, where its cross-section is shrunk by k) covers the arm root's
-        # depth with 2 cm to spare and reaches down to z_bottom
+        # ellipsoid's centre, where its cross-section is shrunk by k) reaches down to z_bottom
+        # and, from the armpit up, spans the arm root's depth with ARMHOLE_CLEARANCE to spare
+        # either side: the half-width w at the armpit height, Δ below the centre, needs the
+        # half-axis w / √(1 − (Δ / c)²) for a vertical half-axis c
         k = np.sqrt(max(1.0 - (0.03 / ax) ** 2, 0.1))
-        y_c, half = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + 0.02
+        y_c, w = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + ARMHOLE_CLEARANCE
+        c, dz = zc - z_bottom, zc - root[2]
+        half = max(w / np.sqrt(1.0 - min(dz / c, 0.9) ** 2), 0.5 * (root[1] - root[0]) + 0.02)
         cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), y_c, zc),
-                         (ax, half / k, (zc - z_bottom) / k)))  # fmt: skip
+                         (ax, half / k, c / k)))  # fmt: skip
     y_front = nb[:, 1].min()
     y_back = nb[:, 1].max()
     if scoop_front > 0:
