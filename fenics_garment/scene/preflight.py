@@ -134,6 +134,8 @@ def scene_limits(scene) -> None:
         raise PreflightError(f"{src}: {err}") from None
     if b.kind == "mannequin":
         mannequin_limits(scene)
+    if b.kind == "arm":
+        human_lengths(scene)
     if b.kind == "scan":
         scan_file(scene, fail)
     if g.kind == "pattern":
@@ -239,12 +241,23 @@ def _file_exists(scene, key: str, name: str, fail: Callable[[str, str], None]) -
     return path
 
 
+#: Smallest fabric values (as FABRIC_MAX; the built-in cotton: E 1.1e6 Pa, G12 1.1e5 Pa, B
+#: 1.5e-5 N·m, 0.46 mm): below them the shell has no stiffness to speak of — the contact
+#: stiffness κ̂ E h / ℓ² and the thickness the checks divide by go to 0 (1e-300: a division by
+#: zero), and Newton's linear solves meet a singular matrix
+FABRIC_MIN = {"E_warp": 1e2, "E_weft": 1e2, "G12": 1e1, "B_warp": 1e-10, "B_weft": 1e-10,
+              "thickness": 1e-5}  # fmt: skip
+
+
 def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
     for k, v in scene.garment.fabric_overrides.items():
-        top = FABRIC_MAX.get(k)
+        top, low = FABRIC_MAX.get(k), FABRIC_MIN.get(k)
         if top is not None and v > top:
             fail(f"garment.fabric_overrides.{k}", f"= {v:g} is more than {top:g}: not a "
                  "fabric (the forces would overflow floating point)")  # fmt: skip
+        if low is not None and v < low:
+            fail(f"garment.fabric_overrides.{k}", f"= {v:g} is less than {low:g}: not a "
+                 "fabric (no stiffness: the contact and the checks would divide by zero)")  # fmt: skip
 
 
 #: Levels a garment kind needs inside the mannequin's crop (z_range) and on the body.
@@ -252,6 +265,19 @@ NEEDED_LEVELS = {"gilet": ("hip", "neck_base"), "dress": ("hip", "neck_base"),
                  "stocking": ("ankle", "thigh")}  # fmt: skip
 #: Largest girth or stature [m] of a mannequin (the largest EN 13402-3 hip girth is 1.5 m).
 MAX_HUMAN_LENGTH = 3.0
+#: Smallest girth or height [m] of a mannequin or an arm (a baby's wrist is some 9 cm round)
+MIN_HUMAN_LENGTH = 0.02
+
+
+def human_lengths(scene) -> None:
+    """The measurements of a mannequin or an arm are lengths of a human body."""
+    src = scene.source or scene.name
+    for k, v in scene.body.measurements.items():
+        if not MIN_HUMAN_LENGTH <= v <= MAX_HUMAN_LENGTH:
+            side = "more" if v > MAX_HUMAN_LENGTH else "less"
+            limit = MAX_HUMAN_LENGTH if v > MAX_HUMAN_LENGTH else MIN_HUMAN_LENGTH
+            raise PreflightError(f"{src}: [body.measurements.{k}] = {v:g} is {side} than "
+                                 f"{limit:g} m: not a human body")  # fmt: skip
 
 
 def mannequin_limits(scene) -> None:
@@ -259,10 +285,7 @@ def mannequin_limits(scene) -> None:
     from fenics_garment.geometry.measurements import measurements
 
     b, src = scene.body, scene.source or scene.name
-    for k, v in b.measurements.items():
-        if v > MAX_HUMAN_LENGTH:
-            raise PreflightError(f"{src}: [body.measurements.{k}] = {v:g} is more than "
-                                 f"{MAX_HUMAN_LENGTH:g} m: not a human body")  # fmt: skip
+    human_lengths(scene)
     try:
         m = measurements(b.size, **b.measurements)
     except (ValueError, TypeError) as err:
