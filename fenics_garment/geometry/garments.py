@@ -813,8 +813,9 @@ def _top_cuts(
         if x_in - x_neck < MIN_STRAP:
             raise GeometryError(
                 f"no room for a shoulder strap: {(x_root - x_neck) * 100:.1f} cm from the base "
-                f"of the neck to the arm root, at least {(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} "
-                "cm needed; check the body's neck_base and armpit landmarks"
+                f"of the neck to the arm root, at least "
+                f"{(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
+                "neck_base and armpit landmarks"
             )
     ax = x_tip + 0.03 - x_in
     for s in (1.0, -1.0):

@@ -535,8 +535,8 @@ def _check_ranges(s: Scene) -> None:
         if v == 0.0 and key in ZERO_MEANS_DEFAULT:
             continue
         u = f" {unit}" if unit else ""
-        _require(lo <= v <= hi, s.source, key,
-                 f"= {v:g}{u} is outside the accepted range [{lo:g}, {hi:g}]{u} ({why})")  # fmt: skip
+        message = f"= {v:g}{u} is outside the accepted range [{lo:g}, {hi:g}]{u} ({why})"
+        _require(lo <= v <= hi, s.source, key, message)
 
 
 def _check(s: Scene) -> None:

@@ -257,7 +257,7 @@ def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
                  "fabric (the forces would overflow floating point)")  # fmt: skip
         if low is not None and v < low:
             fail(f"garment.fabric_overrides.{k}", f"= {v:g} is less than {low:g}: not a "
-                 "fabric (no stiffness: the contact and the checks would divide by zero)")  # fmt: skip
+                 "fabric (no stiffness: the contact and the checks would divide by 0)")  # fmt: skip
 
 
 #: Levels a garment kind needs inside the mannequin's crop (z_range) and on the body.
