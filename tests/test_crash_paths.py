@@ -253,3 +253,31 @@ def test_the_10_m_cylinder_says_what_it_does(tmp_path):
     print(text)
     assert any("a large problem: 1,276,344 dofs" in x for _, x in seen), text
     assert "Newton iteration 1: residual" in seen[-1][1], text
+
+
+# -- no scene sits in meshing or the JIT for good -----------------------------------------------
+@pytest.mark.parametrize(
+    "patch, words",
+    [
+        ("from fenics_garment.geometry import gmsh_utils; gmsh_utils.GMSH_TIME_LIMIT = 1e-3",
+         "error: the build did not finish the cylinder body within 0.001 s"),
+        ("from fenics_garment.scene import run; run.JIT_TIME_LIMIT = 1e-3",
+         "error: the FFCx JIT did not finish compiling the forms and allocating the Jacobian "
+         "within 0.001 s"),
+    ],
+    ids=["meshing", "jit"],
+)  # fmt: skip
+def test_meshing_and_the_jit_have_a_time_limit(patch, words, tmp_path):
+    """``fenics-garment run`` in its own process with the body's meshing or the JIT's limit
+    lowered to 1 ms: the stage that overran is named in one line, exit 2 (the progress line
+    says what is going on before: ``[meshing and building the model · 30 s]``, ``[JIT: …]``)."""
+    path = tmp_path / "tube.toml"
+    path.write_text(config.dumps(_tube()))
+    args = ["run", str(path), "-q", "-o", str(tmp_path / "o")]
+    script = f"{patch}\nimport sys\nfrom fenics_garment import cli\nsys.exit(cli.main({args!r}))"
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=600, env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+    lines = [x for x in p.stderr.splitlines() if x.startswith("error: ")]
+    assert p.returncode == 2, p.stderr
+    assert len(lines) == 1 and lines[0].startswith(words), p.stderr
+    assert "Traceback" not in p.stderr
