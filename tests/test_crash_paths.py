@@ -22,7 +22,8 @@ import os
 import subprocess
 import sys
 import time
-from dataclasses import replace
+import typing
+from dataclasses import is_dataclass, replace
 from pathlib import Path
 
 import pytest
@@ -73,7 +74,8 @@ def test_extreme_lengths_are_refused_on_load_by_run(dotted, value, tmp_path, cap
     assert code == 2, err
     assert err.startswith("error: ") and len(err.splitlines()) == 1, err
     assert str(path) in err and f"[{dotted}]" in err, err
-    assert "accepted range" in err or "finite number" in err, err
+    ranges = ("accepted range", "finite number", " in (", " in [", "must be >=", "must be in")
+    assert any(r in err for r in ranges), err  # (a key's own check may name its range first)
     assert "internal error" not in err
 
 
@@ -90,6 +92,89 @@ def test_the_reported_cases_exit_2_in_a_real_process(tmp_path):
         assert p.returncode == 2, p.stderr
         lines = p.stderr.strip().splitlines()
         assert len(lines) == 1 and f"[{dotted}]" in lines[0] and "[0.0001, 10] m" in lines[0]
+
+
+#: float keys at 1e-300 that are the same as their valid 0 (no friction, no extra shrink, no
+#: spring on a finer mesh level): accepted, and run (below)
+ZERO_LIKE = {"physics.friction", "dressing.margin", "dressing.sequence_spring",
+             "garment.fabric_overrides.density"}  # fmt: skip
+#: the scene each key is checked on (where it is used; the tube otherwise)
+WHERE = {"body.scale": "scan_gilet", "body.landmarks.waist": "scan_gilet",
+         "body.measurements.waist_girth": "cotton_gilet",
+         "body.measurements.wrist_girth": "sleeve_on_arm"}  # fmt: skip
+
+
+def _float_keys() -> list[str]:
+    """Every number of a scene: the float fields of every section, found from the dataclasses
+    (a key added later is checked without a change here), and the numbers of its tables."""
+    keys = []
+    for section, cls in typing.get_type_hints(config.Scene).items():
+        if not is_dataclass(cls):
+            continue
+        for name, tp in typing.get_type_hints(cls).items():
+            if tp is float:
+                keys.append(f"{section}.{name}")
+    fabric = ("E_warp", "E_weft", "G12", "B_warp", "B_weft", "thickness", "density")
+    return keys + [f"garment.fabric_overrides.{k}" for k in fabric] + list(WHERE)[1:]
+
+
+def _outcome(dotted: str, value: float) -> str:
+    """'ok', or the one-line refusal of the scene with ``dotted`` = ``value`` on load and in the
+    pre-build limits (the checks ``fenics-garment run`` makes before building anything)."""
+    demo = WHERE.get(dotted, "tube_on_cylinder")
+    data = config.to_dict(config.load(ROOT / "demos" / f"{demo}.toml"))
+    section, key, *sub = dotted.split(".")
+    if sub:
+        data[section][key] = {**data[section][key], sub[0]: value}
+    else:
+        data[section][key] = value
+    try:
+        preflight.scene_limits(config.from_dict(data, str(ROOT / "demos" / f"{demo}.toml")))
+    except (config.SceneError, preflight.PreflightError) as err:
+        return str(err)
+    return "ok"
+
+
+def test_every_number_of_a_scene_at_1e300_and_1e_300_is_refused_naming_its_key():
+    """All float keys in a loop: 1e300 and 1e-300 are refused before anything is built, in one
+    line naming the key and its accepted range or limit — or, at 1e-300, mean their valid 0
+    (:data:`ZERO_LIKE`, run in the next test)."""
+    keys = _float_keys()
+    assert {"physics.penalty_length", "dressing.spring_length", "body.tissue_depth"} <= set(keys)
+    assert len(keys) >= 30, keys
+    for dotted in keys:
+        for value in (1e300, 1e-300):
+            got = _outcome(dotted, value)
+            if value == 1e-300 and dotted in ZERO_LIKE:
+                assert got == "ok", (dotted, got)
+                continue
+            assert got != "ok", f"{dotted} = {value:g} is accepted"
+            assert "\n" not in got and f"[{dotted}]" in got, (dotted, got)
+            bound = ("accepted range", "more than", "less than", "at least", "must be", "must lie",
+                     "in (", "in [", "outside", "; use ", "not a human body")  # fmt: skip
+            assert any(b in got for b in bound), (dotted, got)
+
+
+@pytest.mark.slow
+def test_the_numbers_that_mean_zero_at_1e_300_run(tmp_path, capsys):
+    """The accepted 1e-300s together, on the small tube with a mesh sequence (so that
+    sequence_spring is used): the run ends with exit 0, no internal error (307 s on the loaded
+    2-core machine)."""
+    s = _tube(physics={"friction": 1e-300}, output={"pictures": False, "vtx": False,
+                                                    "xdmf": False})  # fmt: skip
+    path = tmp_path / "tiny.toml"
+    path.write_text(config.dumps(s))
+    for section, key in (("physics", "friction"), ("dressing", "margin"),
+                         ("dressing", "sequence_spring")):  # fmt: skip
+        _write(path, config.load(path), section, key, 1e-300)
+    _write(path, config.load(path), "dressing", "sequence", 0.0)
+    text = path.read_text().replace("sequence = 0.0", f"sequence = [{1.5 * s.garment.mesh_size}]")
+    path.write_text(text)
+    assert config.load(path).dressing.sequence == [1.5 * s.garment.mesh_size]
+    code = cli.main(["run", str(path), "-q", "--no-checkpoints", "-o", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code == 0, err
+    assert "internal error" not in err
 
 
 def test_the_ranges_admit_every_shipped_scene():
@@ -169,3 +254,31 @@ def test_the_10_m_cylinder_says_what_it_does(tmp_path):
     print(text)
     assert any("a large problem: 1,276,344 dofs" in x for _, x in seen), text
     assert "Newton iteration 1: residual" in seen[-1][1], text
+
+
+# -- no scene sits in meshing or the JIT for good -----------------------------------------------
+@pytest.mark.parametrize(
+    "patch, words",
+    [
+        ("from fenics_garment.geometry import gmsh_utils; gmsh_utils.GMSH_TIME_LIMIT = 1e-3",
+         "error: the build did not finish the cylinder body within 0.001 s"),
+        ("from fenics_garment.scene import run; run.JIT_TIME_LIMIT = 1e-3",
+         "error: the FFCx JIT did not finish compiling the forms and allocating the Jacobian "
+         "within 0.001 s"),
+    ],
+    ids=["meshing", "jit"],
+)  # fmt: skip
+def test_meshing_and_the_jit_have_a_time_limit(patch, words, tmp_path):
+    """``fenics-garment run`` in its own process with the body's meshing or the JIT's limit
+    lowered to 1 ms: the stage that overran is named in one line, exit 2 (the progress line
+    says what is going on before: ``[meshing and building the model · 30 s]``, ``[JIT: …]``)."""
+    path = tmp_path / "tube.toml"
+    path.write_text(config.dumps(_tube()))
+    args = ["run", str(path), "-q", "-o", str(tmp_path / "o")]
+    script = f"{patch}\nimport sys\nfrom fenics_garment import cli\nsys.exit(cli.main({args!r}))"
+    p = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True,
+                       timeout=600, env={**os.environ, "PYTHONPATH": str(ROOT)})  # fmt: skip
+    lines = [x for x in p.stderr.splitlines() if x.startswith("error: ")]
+    assert p.returncode == 2, p.stderr
+    assert len(lines) == 1 and lines[0].startswith(words), p.stderr
+    assert "Traceback" not in p.stderr

@@ -21,10 +21,11 @@ centred near x = 0), not from fixed fractions of the stature:
 * **Neck**: the smallest torso girth between the shoulders and the face lies just under the
   chin; the **head** starts where, going up, the girth first exceeds ``HEAD_FLARE`` × that
   girth (the chin's underside, the menton), or lower where the front comes forward abruptly
-  under the chin (:func:`_chin`: a double chin, whose girth does not flare); the **neck base**
+  under the chin (:func:`_chin`: a double chin, whose girth does not flare), or under a head
+  less wide than that, from its widest section down (:func:`_neck_and_head`); the **neck base**
   60 % of the way from the shoulder points to that narrowest girth (the side neck point's
-  level), and the **neck** level (mid-neck girth) half-way between the neck base and the
-  narrowest girth.
+  level), higher where that is still on the shoulders' slope (:func:`_neck_base`), and the
+  **neck** level (mid-neck girth) half-way between the neck base and the narrowest girth.
 * **Torso girths** above the armpits are measured on the section clipped to the arm cuts, so
   the upper arms never count; below the armpits the torso outline is on its own.
 * **Bust**: the level of the bust points, the most forward points of the chest going down
@@ -77,6 +78,13 @@ HEAD_FLARE = 1.1
 #: menton measured independently (``benchmarks/landmarks.py``), also under a double chin, where
 #: the girth does not flare (``HEAD_FLARE``)
 CHIN_BAND, CHIN_JUMP, CHIN_STEP = 0.015, 0.006, 0.0025
+#: a head less wide than HEAD_FLARE × its neck: the girth falls by this share from the head's
+#: widest section down to the neck (MakeHuman's heavy men: 10 %; noise: under 1 %)
+NECK_DIP = 0.05
+#: largest girth at the base of the neck over the neck girth: below it the section is on the
+#: shoulders' slope (MakeHuman's bodies: 1.10–1.23 at 60 % of the way from the shoulder points
+#: up to the neck, and up to 2.4 × at the shoulder points)
+NECK_BASE_FLARE = 1.25
 #: a calf is a widest leg girth this much above the girth at the top of its range (below the
 #: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
 CALF_BULGE = 1.01
@@ -283,7 +291,7 @@ def analyse(
         head = chin if head is None else min(head, chin)
     if head is not None:
         marks["head"] = head
-    marks["neck_base"] = z_shoulder + 0.6 * (narrow - z_shoulder)
+    marks["neck_base"] = _neck_base(girth, z_shoulder, narrow)
     marks["neck"] = 0.5 * (marks["neck_base"] + narrow)  # mid-neck
     marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front, bool(armpit)))
     marks.update(leg_levels(v, t, crotch, H))
@@ -390,20 +398,53 @@ def _chin(v: Array, t: IArray, lo: float, H: float) -> float | None:
 
 def _neck_and_head(v: Array, t: IArray, girth, lo: float, hi: float) -> tuple[float, float | None]:
     """Going up from ``lo``: the neck is the running girth minimum at the height where the girth
-    first exceeds ``HEAD_FLARE`` times it (the jaw: the head starts there); without a head the
-    neck is the smallest girth up to ``hi``."""
+    first exceeds ``HEAD_FLARE`` times it (the jaw: the head starts there).
+
+    A thick neck under a head less than ``HEAD_FLARE`` times as wide (MakeHuman's heavy men:
+    head 1.11 × the neck girth) is found from the top down instead: the head's widest section
+    is the first girth maximum that the girth falls :data:`NECK_DIP` below going down, the neck
+    the smallest girth under it, the head from half-way up in girth from neck to head (before,
+    the neck was the smallest girth up to ``hi``: the crown, 34 cm above the shoulders of the
+    tall, heavy, muscular man). Without a head at all the neck is the smallest girth up to
+    ``hi``."""
     zn = [z for z in np.linspace(lo, hi, 60) if torso_outline(v, t, z) is not None]
     if not zn:
         raise ScanError("no neck found above the shoulders")
+    gs = [girth(z) for z in zn]
     best_z, best_g, prev = zn[0], np.inf, zn[0]
-    for z in zn:
-        g = girth(z)
+    for z, g in zip(zn, gs, strict=True):
         if g < best_g:
             best_z, best_g = z, g
         elif g > HEAD_FLARE * best_g:
             return float(best_z), 0.5 * float(prev + z)  # between the samples either side
         prev = z
-    return float(best_z), None
+    k_max, k_head = len(gs) - 1, None
+    for k in range(len(gs) - 1, -1, -1):  # from the crown down to the head's widest section
+        if gs[k] > gs[k_max]:
+            k_max = k
+        elif gs[k] < (1.0 - NECK_DIP) * gs[k_max]:
+            k_head = k_max
+            break
+    if k_head is None:
+        return float(best_z), None
+    k_neck = int(np.argmin(gs[:k_head]))
+    half = 0.5 * (gs[k_neck] + gs[k_head])
+    k_jaw = next(k for k in range(k_neck, k_head + 1) if gs[k] >= half)
+    return float(zn[k_neck]), float(zn[k_jaw])
+
+
+def _neck_base(girth, shoulder: float, neck: float) -> float:
+    """The base of the neck: 60 % of the way up from the shoulder points to the neck, or higher
+    where that is still on the slope of the shoulders — its girth more than
+    :data:`NECK_BASE_FLARE` × the neck girth — the height between them where the girth comes
+    down to that (bisection). MakeHuman's bodies at 60 %: 1.10–1.23 × the neck girth, but the
+    short, heavy, old woman (sloping shoulders, a short neck) 1.68 × (0.52 m of tape across the
+    shoulders' slope, where the gilet's neckline and straps were cut)."""
+    z = shoulder + 0.6 * (neck - shoulder)
+    limit = NECK_BASE_FLARE * girth(neck)
+    if girth(z) <= limit:
+        return z
+    return _refine(lambda zz: girth(zz) > limit, z, neck, steps=10)
 
 
 def torso_levels(

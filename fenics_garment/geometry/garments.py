@@ -366,6 +366,17 @@ def _centre_of(levels: dict[str, tuple[float, Array]]) -> tuple[Array, Array]:
     return zs[order], cs[order]
 
 
+#: Largest height [m] between the rings a gilet on a segmented body (a scan, the human
+#: mannequin: levels found on the body, unevenly spaced) is lofted through: its landmark
+#: sections are joined by monotone interpolated rings (``mannequin.guide_rings``), so that the
+#: loft cannot overshoot between them into the body or away from it (MakeHuman's short, heavy,
+#: old woman: 6.7 cm into the belly without). Not on the parametric mannequin, whose levels are
+#: its own proportions and whose recorded runs stand: there the rings move the strap's front
+#: between shoulder and neck base by up to 1.1 cm (median 1 mm over the gilet). Not on the
+#: dress: with its degree-3 loft, gmsh did not finish the cotton dress's rings in 300 s.
+TORSO_GUIDE = 0.02
+
+
 def _build(
     g: Any,
     kind: str,
@@ -378,8 +389,12 @@ def _build(
     per_circle: int = 0,
     order: int = 2,
     refine: EdgeRefinement | None = None,
+    guide: float = 0.0,
 ) -> dict[str, Any]:
     """Loft, cut, mesh, orient, name; returns the plain arrays (on the gmsh rank).
+
+    ``guide`` > 0: the loft runs through monotone guide rings at most ``guide`` apart between
+    the levels (:func:`~.mannequin.guide_rings`; the gilet on a segmented body: TORSO_GUIDE).
 
     ``order``: geometry degree of the mesh handed to DOLFINx (1 straight, 2 curved: module doc).
     ``refine``: smaller cells along some edges (:class:`EdgeRefinement`), or None.
@@ -391,7 +406,8 @@ def _build(
     if order not in (1, 2):
         raise ValueError(f"garment geometry order must be 1 or 2, got {order}")
     occ = g.model.occ
-    faces = [dt for dt in add_loft(g, levels, solid=False, max_degree=max_degree) if dt[0] == 2]
+    loft = add_loft(g, levels, solid=False, max_degree=max_degree, guide=guide)
+    faces = [dt for dt in loft if dt[0] == 2]
     if cuts:
         tools = []
         for c in cuts:
@@ -763,6 +779,17 @@ def _y_mid(levels: dict[str, tuple[float, Array]]) -> float:
     return float(np.mean([sec[:, 1].mean() for _, sec in levels.values()]))
 
 
+#: How far inside the arm root (the vertical plane through the armpit) a segmented body's
+#: armhole begins [m], so that a torso garment clears the arm. Measured on MakeHuman's bodies
+#: (the scan gilet's pattern, ``tests/test_body_sweep_fixes.py``): the nearest point of the
+#: garment to an arm 1.9 mm away on the female body and 1.5 mm on the short, heavy, old woman
+#: with the armholes cut up to the arm roots (3.1 % of the dressed female gilet's contact force
+#: on the arms), 4.5 and 3.7 mm with this clearance (no contact on the arms: exit 0)
+ARMHOLE_CLEARANCE = 0.015
+#: The narrowest shoulder strap left between the neck and the armhole [m]
+MIN_STRAP = 0.02
+
+
 def _top_cuts(
     body: BodySurface,
     levels: dict[str, tuple[float, Array]],
@@ -782,10 +809,25 @@ def _top_cuts(
     x_neck = nb[:, 0].max()
     z_bottom = z_uc - arm_drop
     if "armpit" in body.landmarks:  # a segmented body: the armhole reaches below the real armpit
-        z_bottom = min(z_bottom, body.landmarks["armpit"] - arm_drop)
+        drop = max(arm_drop, 2 * ARMHOLE_CLEARANCE)
+        z_bottom = min(z_bottom, body.landmarks["armpit"] - drop)
     zc = z_sh + 0.03
     cuts = []
     x_in = x_neck + strap
+    roots = [body.points.get(f"armpit_{side}") for side in ("left", "right")]
+    if all(r is not None and np.all(np.isfinite(r)) for r in roots):
+        # a segmented body: the armhole's inner edge ARMHOLE_CLEARANCE inside the arm roots
+        # (the planes through the armpits), the strap narrowed to what is left between it
+        # and the neck, so that the garment clears the arms
+        x_root = min(abs(float(r[0])) for r in roots)
+        x_in = min(x_in, x_root - ARMHOLE_CLEARANCE)
+        if x_in - x_neck < MIN_STRAP:
+            raise GeometryError(
+                f"no room for a shoulder strap: {(x_root - x_neck) * 100:.1f} cm from the base "
+                f"of the neck to the arm root, at least "
+                f"{(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
+                "neck_base and armpit landmarks"
+            )
     ax = x_tip + 0.03 - x_in
     for s in (1.0, -1.0):
         root = body.points.get("arm_root_left" if s > 0 else "arm_root_right")
@@ -795,12 +837,16 @@ def _top_cuts(
             )
             continue
         # a segmented body (scan): the opening in the garment's plane (0.03 m inside the
-        # ellipsoid's centre, where its cross-section is shrunk by k) covers the arm root's
-        # depth with 2 cm to spare and reaches down to z_bottom
+        # ellipsoid's centre, where its cross-section is shrunk by k) reaches down to z_bottom
+        # and, from the armpit up, spans the arm root's depth with ARMHOLE_CLEARANCE to spare
+        # either side: the half-width w at the armpit height, Δ below the centre, needs the
+        # half-axis w / √(1 − (Δ / c)²) for a vertical half-axis c
         k = np.sqrt(max(1.0 - (0.03 / ax) ** 2, 0.1))
-        y_c, half = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + 0.02
+        y_c, w = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + ARMHOLE_CLEARANCE
+        c, dz = zc - z_bottom, zc - root[2]
+        half = max(w / np.sqrt(1.0 - min(dz / c, 0.9) ** 2), 0.5 * (root[1] - root[0]) + 0.02)
         cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), y_c, zc),
-                         (ax, half / k, (zc - z_bottom) / k)))  # fmt: skip
+                         (ax, half / k, c / k)))  # fmt: skip
     y_front = nb[:, 1].min()
     y_back = nb[:, 1].max()
     if scoop_front > 0:
@@ -867,7 +913,18 @@ def make_gilet(
     return _finish(
         "gilet",
         comm,
-        lambda g: _build(g, "gilet", levels, cuts, cls, h, quads, order=order, refine=refine),
+        lambda g: _build(
+            g,
+            "gilet",
+            levels,
+            cuts,
+            cls,
+            h,
+            quads,
+            order=order,
+            refine=refine,
+            guide=TORSO_GUIDE if getattr(body, "part", None) is not None else 0.0,
+        ),
         table,
     )
 

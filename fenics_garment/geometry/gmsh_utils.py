@@ -115,13 +115,21 @@ GMSH_TIME_LIMIT = 600.0
 
 
 @contextmanager
-def time_limit(seconds: float | None, what: str) -> Iterator[None]:
+def time_limit(
+    seconds: float | None,
+    what: str,
+    by: str = "gmsh",
+    why: str = "a hung mesher",
+    hint: str = "check the body's landmarks or use a coarser mesh_size",
+) -> Iterator[None]:
     """Stop the process with a one-line error and exit code 2 if the block takes too long.
 
     gmsh's meshers run in C++ and cannot be interrupted from Python; the gmsh API is called
     through ctypes, which releases the GIL, so a watchdog thread can still act: it writes
     ``error: gmsh did not finish <what> within <seconds> s …`` to stderr and ends the process
     (``os._exit(2)``; under MPI, ``mpiexec`` then stops the other ranks). ``None``: no limit.
+    ``by``, ``why``, ``hint``: who does the work, what a stop means, what to do (the C compiler
+    of the FFCx JIT: ``scene.run``).
     """
     import os
     import sys
@@ -133,8 +141,7 @@ def time_limit(seconds: float | None, what: str) -> Iterator[None]:
 
     def expire() -> None:
         sys.stderr.write(
-            f"error: gmsh did not finish {what} within {seconds:g} s (a hung mesher); "
-            "check the body's landmarks or use a coarser mesh_size\n"
+            f"error: {by} did not finish {what} within {seconds:g} s ({why}); {hint}\n"
         )
         sys.stderr.flush()
         os._exit(2)

@@ -114,12 +114,17 @@ def add_loft(
     n_pts: int = 24,
     solid: bool = True,
     max_degree: int = -1,
+    guide: float = 0.0,
 ):
     """OCC loft through closed sections; each wire is a back half and a front half.
 
     ``max_degree`` caps the degree of the loft surface across the sections (−1: OCC's default).
     With OCC's default the dress's flared skirt (sections 15 cm apart below a narrow waist)
     overshoots into a fold that crosses the garment's axis near the hem: the dress uses 3.
+
+    ``guide`` > 0 [m]: rings are added between the sections, at most ``guide`` apart, on a
+    shape-preserving (monotone, PCHIP) interpolation of the sections' points in height
+    (:func:`guide_rings`), so that the loft cannot overshoot between unevenly spaced sections.
 
     The halves meet at the lateral points (+x and −x), so an open loft yields two faces
     (back first, then front) sharing the side lines; returns the OCC entities made. The halves
@@ -132,7 +137,36 @@ def add_loft(
     for z, pts in secs.values():
         p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
         rings.append(np.column_stack([p, np.full(n_pts, z)]))
+    if guide > 0:
+        rings = guide_rings(rings, guide)
     return loft_rings(g, rings, solid, max_degree)
+
+
+def guide_rings(rings: list[np.ndarray], spacing: float) -> list[np.ndarray]:
+    """``rings`` (horizontal, bottom to top, the same number of points from the same angle)
+    with rings added between them at most ``spacing`` apart in height, their points on the
+    monotone piecewise-cubic (PCHIP) interpolation in height of each point's x and y.
+
+    A loft is a spline through its sections: between sections unevenly spaced in height it
+    overshoots, as a polynomial does. The scan gilet of MakeHuman's short, heavy, old woman
+    (sections 1.4 cm apart at under-bust and bust, 10 cm at hip and abdomen) had its front
+    dip 6.7 cm inside the belly between hip and abdomen, and come 2 cm out in front of the
+    abdomen above it; on the PCHIP rings no point leaves the range of its neighbouring
+    sections."""
+    from scipy.interpolate import PchipInterpolator
+
+    z = np.array([r[0, 2] for r in rings])
+    if len(rings) < 3 or np.any(np.diff(z) <= 0):
+        return rings
+    xy = np.stack([r[:, :2] for r in rings])  # (levels, points, 2)
+    f = PchipInterpolator(z, xy, axis=0)
+    out = []
+    for z0, z1, ring in zip(z[:-1], z[1:], rings[:-1], strict=True):
+        out.append(ring)
+        n = int(np.ceil((z1 - z0) / spacing))
+        for zk in z0 + (z1 - z0) * np.arange(1, n) / n:
+            out.append(np.column_stack([f(zk), np.full(len(ring), zk)]))
+    return [*out, rings[-1]]
 
 
 def loft_rings(g, rings: list[np.ndarray], solid: bool = True, max_degree: int = -1):

@@ -17,6 +17,7 @@ from fenics_garment.contact import search
 from fenics_garment.contact import shell as shell_contact
 from fenics_garment.contact.smooth import SmoothBody
 from fenics_garment.geometry import garments as gm
+from fenics_garment.geometry import gmsh_utils
 from fenics_garment.geometry.body import BodySurface
 from fenics_garment.materials import Fabric, fabric
 from fenics_garment.scene.config import DressingConfig, Scene, scene_file
@@ -25,38 +26,48 @@ from fenics_garment.shell.model import ELEMENTS, ShellModel
 
 
 def make_body(scene: Scene, comm: MPI.Comm) -> BodySurface:
-    """The body of the scene, built on rank 0 and broadcast (gmsh is deterministic but serial)."""
+    """The body of the scene, built on rank 0 and broadcast (gmsh is deterministic but serial),
+    within :data:`~fenics_garment.geometry.gmsh_utils.GMSH_TIME_LIMIT` seconds (else one line
+    and exit 2: no scene sits in meshing for good)."""
     b = scene.body
     body = None
     if comm.rank == 0:
-        if b.kind == "cylinder":
-            body = gm.cylinder_body(b.radius, b.length, h=b.mesh_size)
-        elif b.kind == "arm":
-            from fenics_garment.geometry.mannequin import make_arm
-
-            girths = {k.removesuffix("_girth"): v for k, v in b.measurements.items()}
-            body = make_arm(girths, h=b.mesh_size)
-        elif b.kind == "scan":
-            from fenics_garment.geometry.scan import load_scan
-
-            body, _ = load_scan(scene_file(scene, b.file), units=b.units or None, up=b.up or None,
-                                max_hole_edges=b.max_hole_edges, scale=b.scale or None,
-                                remesh=b.mesh_size if b.remesh else None,
-                                landmarks=dict(b.landmarks) or None)  # fmt: skip
-        else:
-            from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
-            from fenics_garment.geometry.measurements import measurements
-
-            m = measurements(b.size, **b.measurements)
-            sizes = MeshSizes(coarse=b.mesh_size, fine=b.mesh_size)
-            if b.human:  # the whole body, segmented as a scan (z_range and legs not used)
-                from fenics_garment.geometry.human import make_human
-
-                body = make_human(m, sizes, landmarks=dict(b.landmarks) or None)
-            else:
-                z = tuple(b.z_range) if b.z_range else None
-                body = make_mannequin(m, sizes, z_range=z, legs=b.legs)
+        why = "a hung mesher or section search"
+        limit = gmsh_utils.GMSH_TIME_LIMIT
+        with gmsh_utils.time_limit(limit, f"the {b.kind} body", by="the build", why=why):
+            body = _make_body(scene)
     return comm.bcast(body, root=0)
+
+
+def _make_body(scene: Scene) -> BodySurface:
+    """The body of the scene, on this process (:func:`make_body`)."""
+    b = scene.body
+    if b.kind == "cylinder":
+        return gm.cylinder_body(b.radius, b.length, h=b.mesh_size)
+    if b.kind == "arm":
+        from fenics_garment.geometry.mannequin import make_arm
+
+        girths = {k.removesuffix("_girth"): v for k, v in b.measurements.items()}
+        return make_arm(girths, h=b.mesh_size)
+    if b.kind == "scan":
+        from fenics_garment.geometry.scan import load_scan
+
+        body, _ = load_scan(scene_file(scene, b.file), units=b.units or None, up=b.up or None,
+                            max_hole_edges=b.max_hole_edges, scale=b.scale or None,
+                            remesh=b.mesh_size if b.remesh else None,
+                            landmarks=dict(b.landmarks) or None)  # fmt: skip
+        return body
+    from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
+    from fenics_garment.geometry.measurements import measurements
+
+    m = measurements(b.size, **b.measurements)
+    sizes = MeshSizes(coarse=b.mesh_size, fine=b.mesh_size)
+    if b.human:  # the whole body, segmented as a scan (z_range and legs not used)
+        from fenics_garment.geometry.human import make_human
+
+        return make_human(m, sizes, landmarks=dict(b.landmarks) or None)
+    z = tuple(b.z_range) if b.z_range else None
+    return make_mannequin(m, sizes, z_range=z, legs=b.legs)
 
 
 def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentSurface:
@@ -72,7 +83,9 @@ def make_garment(scene: Scene, body: BodySurface, comm: MPI.Comm) -> gm.GarmentS
         from fenics_garment.pattern.sew import fit_levels, pattern_garment
 
         pattern = read_pattern(scene_file(scene, g.pattern))
-        garment = pattern_garment(pattern, body, kw["h"], comm, kw["order"], kw.get("refine"))[0]
+        with gmsh_utils.time_limit(gmsh_utils.GMSH_TIME_LIMIT, "the sewn pattern"):
+            garment = pattern_garment(pattern, body, kw["h"], comm, kw["order"],
+                                      kw.get("refine"))[0]  # fmt: skip
         garment.levels = fit_levels(garment, body)
         return garment
     if g.kind in ("gilet", "dress") and g.rest == "pattern":

@@ -375,18 +375,48 @@ ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 #:   millimetres; preflight checks it against the body's radius once the body is built).
 #: * ``garment.edge_band``: the band over which refined edge cells grow back to the mesh size,
 #:   from 0.1 mm to 10 m.
+#:
+#: And the other numbers that would make a run meaningless or endless far outside what can mean
+#: something (each one at 1e300 and 1e-300 is refused, or equals its valid 0, in
+#: ``tests/test_crash_paths.py``):
+#:
+#: * ``physics.tolerance``, ``dressing.path_tolerance``: relative tolerances below 10⁻⁴ of the
+#:   thickness and 10⁻¹⁰ of the force scale cannot be reached in double precision after the
+#:   contact's and the residual's round-off (the multiplier passes or Newton would run out).
+#: * ``garment.edge_ratio``: edge cells of 1e-300 × the mesh size would make gmsh run out of
+#:   memory: at most 100 times smaller than the mesh size.
+#: * ``output.sensor_diameter``: a pressure sensor from 1 mm (none smaller is made) to 20 cm.
+#: * ``dressing.release_ratio``: 0.01 (a release of the spring in three solves) to 0.9 (110);
+#:   0.999 would take 11,508 solves.
+#: * ``dressing.grow``: the adaptive schedule's step growth, at most tenfold a step.
+#: * ``body.scale``: metres per file unit of a scan, from a micrometre to a kilometre (mm:
+#:   0.001, in: 0.0254); 0 means "use units".
+#: * ``body.radius``, ``body.length``: a cylinder body's, from a finger to a barrel (also where
+#:   the body is not a cylinder and they are not used, so that a scene changes kind safely).
 LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
     "physics.penalty_length": (1e-4, 10.0, "m", "a length of the garment (κ = κ̂ E h / ℓ²); 0: "
                                "the garment's largest cell"),
     "dressing.spring_length": (1e-4, 10.0, "m", "a length of the garment (c = c₀ E h / L²)"),
     "body.tissue_depth": (1e-3, 0.5, "m", "soft tissue over bone"),
-    "physics.stick_stiffness": (0.0, 1e9, "Pa/m", "1 MPa of shear over 1 mm of tissue; 0: the "
-                                "skin's G / body.tissue_depth"),
+    "physics.stick_stiffness": (1e2, 1e9, "Pa/m", "1 MPa of shear over 1 mm of tissue down to "
+                                "100 Pa over 1 m; 0: the skin's G / body.tissue_depth"),
     "dressing.margin": (0.0, 1.0, "m", "an extra shrink of the body of a few millimetres"),
     "garment.edge_band": (1e-4, 10.0, "m", "the band of refined cells along an edge"),
+    "physics.tolerance": (1e-4, 1.0, "", "a fraction of the garment thickness"),
+    "dressing.path_tolerance": (1e-10, 1e-2, "", "a fraction of the scene's force scale"),
+    "garment.edge_ratio": (1e-2, 1.0, "", "the edge cells' size / mesh_size"),
+    "output.sensor_diameter": (1e-3, 0.2, "m", "a pressure sensor's diameter"),
+    "dressing.release_ratio": (1e-2, 0.9, "", "the spring's factor per release solve"),
+    "dressing.grow": (1.0, 10.0, "", "the adaptive schedule's step growth"),
+    "body.scale": (1e-6, 1e3, "m per file unit", "0: use units"),
+    "body.radius": (1e-3, 10.0, "m", "a cylinder body's radius"),
+    "body.length": (1e-3, 10.0, "m", "a cylinder body's length"),
 }  # fmt: skip
 #: of the keys above, those where 0 selects a default rule (accepted besides the range)
-ZERO_MEANS_DEFAULT = ("physics.penalty_length",)
+ZERO_MEANS_DEFAULT = ("physics.penalty_length", "physics.stick_stiffness", "body.scale")
+#: Lowest and highest landmark height [m] a scene may set (``body.landmarks``): an ankle is
+#: some 7 cm above the floor, no body is 3 m tall
+MIN_LANDMARK, MAX_LANDMARK = 0.01, 3.0
 
 
 def scene_file(scene: Scene, name: str) -> Path:
@@ -556,9 +586,9 @@ def _check_ranges(s: Scene) -> None:
         v = getattr(getattr(s, section), name)
         if v == 0.0 and key in ZERO_MEANS_DEFAULT:
             continue
-        _require(lo <= v <= hi, s.source, key,
-                 f"= {v:g} {unit} is outside the accepted range [{lo:g}, {hi:g}] {unit} "
-                 f"({why})")  # fmt: skip
+        u = f" {unit}" if unit else ""
+        message = f"= {v:g}{u} is outside the accepted range [{lo:g}, {hi:g}]{u} ({why})"
+        _require(lo <= v <= hi, s.source, key, message)
 
 
 def _check(s: Scene) -> None:
@@ -605,7 +635,9 @@ def _check(s: Scene) -> None:
         for k, v in b.landmarks.items():
             if k not in LANDMARKS:
                 raise _unknown(k, list(LANDMARKS), "body.landmarks", src)
-            _require(v > 0, src, f"body.landmarks.{k}", f"must be a height > 0 [m], got {v}")
+            _require(MIN_LANDMARK <= v <= MAX_LANDMARK, src, f"body.landmarks.{k}",
+                     f"must be a height above the floor in [{MIN_LANDMARK:g}, {MAX_LANDMARK:g}] "
+                     f"m, got {v:g}")  # fmt: skip
     _one_of(b.tissue, TISSUES, src, "body.tissue")
     _require(b.tissue_depth > 0, src, "body.tissue_depth",
              f"must be positive, got {b.tissue_depth}")  # fmt: skip

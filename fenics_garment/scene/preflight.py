@@ -21,6 +21,8 @@ import os
 from collections.abc import Callable
 from pathlib import Path
 
+import numpy as np
+
 from fenics_garment._stack import MPI
 from fenics_garment.petsc_options import PetscOptionError, check_options
 
@@ -134,6 +136,8 @@ def scene_limits(scene) -> None:
         raise PreflightError(f"{src}: {err}") from None
     if b.kind == "mannequin":
         mannequin_limits(scene)
+    if b.kind == "arm":
+        human_lengths(scene)
     if b.kind == "scan":
         scan_file(scene, fail)
     if g.kind == "pattern":
@@ -239,12 +243,23 @@ def _file_exists(scene, key: str, name: str, fail: Callable[[str, str], None]) -
     return path
 
 
+#: Smallest fabric values (as FABRIC_MAX; the built-in cotton: E 1.1e6 Pa, G12 1.1e5 Pa, B
+#: 1.5e-5 N·m, 0.46 mm): below them the shell has no stiffness to speak of — the contact
+#: stiffness κ̂ E h / ℓ² and the thickness the checks divide by go to 0 (1e-300: a division by
+#: zero), and Newton's linear solves meet a singular matrix
+FABRIC_MIN = {"E_warp": 1e2, "E_weft": 1e2, "G12": 1e1, "B_warp": 1e-10, "B_weft": 1e-10,
+              "thickness": 1e-5}  # fmt: skip
+
+
 def fabric_limits(scene, fail: Callable[[str, str], None]) -> None:
     for k, v in scene.garment.fabric_overrides.items():
-        top = FABRIC_MAX.get(k)
+        top, low = FABRIC_MAX.get(k), FABRIC_MIN.get(k)
         if top is not None and v > top:
             fail(f"garment.fabric_overrides.{k}", f"= {v:g} is more than {top:g}: not a "
                  "fabric (the forces would overflow floating point)")  # fmt: skip
+        if low is not None and v < low:
+            fail(f"garment.fabric_overrides.{k}", f"= {v:g} is less than {low:g}: not a "
+                 "fabric (no stiffness: the contact and the checks would divide by 0)")  # fmt: skip
 
 
 #: Levels a garment kind needs inside the mannequin's crop (z_range) and on the body.
@@ -252,6 +267,19 @@ NEEDED_LEVELS = {"gilet": ("hip", "neck_base"), "dress": ("hip", "neck_base"),
                  "stocking": ("ankle", "thigh")}  # fmt: skip
 #: Largest girth or stature [m] of a mannequin (the largest EN 13402-3 hip girth is 1.5 m).
 MAX_HUMAN_LENGTH = 3.0
+#: Smallest girth or height [m] of a mannequin or an arm (a baby's wrist is some 9 cm round)
+MIN_HUMAN_LENGTH = 0.02
+
+
+def human_lengths(scene) -> None:
+    """The measurements of a mannequin or an arm are lengths of a human body."""
+    src = scene.source or scene.name
+    for k, v in scene.body.measurements.items():
+        if not MIN_HUMAN_LENGTH <= v <= MAX_HUMAN_LENGTH:
+            side = "more" if v > MAX_HUMAN_LENGTH else "less"
+            limit = MAX_HUMAN_LENGTH if v > MAX_HUMAN_LENGTH else MIN_HUMAN_LENGTH
+            raise PreflightError(f"{src}: [body.measurements.{k}] = {v:g} is {side} than "
+                                 f"{limit:g} m: not a human body")  # fmt: skip
 
 
 def mannequin_limits(scene) -> None:
@@ -259,10 +287,7 @@ def mannequin_limits(scene) -> None:
     from fenics_garment.geometry.measurements import measurements
 
     b, src = scene.body, scene.source or scene.name
-    for k, v in b.measurements.items():
-        if v > MAX_HUMAN_LENGTH:
-            raise PreflightError(f"{src}: [body.measurements.{k}] = {v:g} is more than "
-                                 f"{MAX_HUMAN_LENGTH:g} m: not a human body")  # fmt: skip
+    human_lengths(scene)
     try:
         m = measurements(b.size, **b.measurements)
     except (ValueError, TypeError) as err:
@@ -310,17 +335,74 @@ def ranks_own_cells(n_owned: int, n_cells: int, comm: MPI.Comm) -> None:
         )
 
 
+#: Share of the body's edges near the garment's narrowest level that the facet size
+#: (:func:`body_facet_size`) is above: a few long edges along a limb (slivers running down the
+#: arm) do not cut into its round section.
+FACET_QUANTILE = 0.9
+#: How far [m] along the garment from its narrowest level, and out from it, the body's edges
+#: are measured (:func:`body_facet_size`).
+FACET_BAND = 0.02
+
+
+def body_facet_size(built) -> float | None:
+    """The size [m] of the body's own facets round the section where the garment is narrowest:
+    on a scan kept as it is (``body.remesh = false``), the :data:`FACET_QUANTILE` quantile of
+    the body's edges within :data:`FACET_BAND` of the garment's points within FACET_BAND (along
+    the garment) of its narrowest level, each edge's length across the garment's axis (the
+    warp there): the part that cuts a chord into the round section (MakeHuman's forearm has
+    edges 14 mm long along it and 5 mm round it). None where the body was meshed at
+    ``body.mesh_size`` (mannequin, arm, cylinder, remeshed scan) or nothing is near."""
+    from scipy.spatial import cKDTree
+
+    sc, body, garment = built.scene, built.body, built.garment
+    if sc.body.kind != "scan" or sc.body.remesh or not garment.levels:
+        return None
+    level = min(garment.levels, key=lambda lv: lv.body_girth)
+    sel = np.abs(garment.axial(garment.points) - level.z) <= FACET_BAND
+    pts = garment.points[sel]
+    if not len(pts):
+        return None
+    v, t = body.vertices, body.triangles
+    d, _ = cKDTree(pts).query(v, distance_upper_bound=FACET_BAND + abs(level.clearance))
+    near = np.isfinite(d)
+    tri = t[near[t].all(axis=1)]
+    if not len(tri):
+        return None
+    edges = np.concatenate([tri[:, [0, 1]], tri[:, [1, 2]], tri[:, [2, 0]]])
+    e = v[edges[:, 0]] - v[edges[:, 1]]
+    axis = garment.warp[sel].mean(axis=0)  # the warp runs along the garment's axis
+    axis /= max(float(np.linalg.norm(axis)), 1e-300)
+    across = e - np.outer(e @ axis, axis)  # the part of an edge round the section
+    return float(np.quantile(np.linalg.norm(across, axis=1), FACET_QUANTILE))
+
+
 def mesh_resolution(built) -> None:
-    """The body's facets are small against its curvature radius."""
+    """The body's facets are small against its curvature radius: on a scan kept as it is, its
+    own facets where the garment is narrowest (:func:`body_facet_size`: MakeHuman's arm has
+    4–5 mm edges at the wrist, whatever ``body.mesh_size`` says), else ``body.mesh_size``, the
+    size the body was meshed at."""
     sc = built.scene
     r, where = smallest_body_radius(built)
+    h_limit = MAX_BODY_H_OVER_R * r
+    measured = body_facet_size(built)
+    if measured is not None:
+        if measured > h_limit:
+            raise PreflightError(
+                f"{sc.source or sc.name}: [body.file] the scan's facets are too coarse for the "
+                f"body's curvature where the garment is: {measured * 1e3:.1f} mm edges "
+                f"({FACET_QUANTILE:.0%} quantile) against its smallest radius ({where}) of "
+                f"{r * 1e3:.1f} mm, cutting up to {measured**2 / (8 * r) * 1e3:.1f} mm into the "
+                f"surface; remesh it: body.remesh = true with body.mesh_size <= "
+                f"{math.floor(h_limit * 1e4) / 1e4:g} m"
+            )
+        return
     h = sc.body.mesh_size
-    if h > MAX_BODY_H_OVER_R * r:
+    if h > h_limit:
         raise PreflightError(
             f"{sc.source or sc.name}: [body.mesh_size] = {h:g} m is too coarse for the body's "
             f"curvature: its smallest radius ({where}) is {r:.3g} m, so facets would cut up to "
             f"{h * h / (8 * r) * 1e3:.1f} mm into the curved surface; use body.mesh_size <= "
-            f"{math.floor(MAX_BODY_H_OVER_R * r * 1e4) / 1e4:g} m (r/2, rounded down)"
+            f"{math.floor(h_limit * 1e4) / 1e4:g} m (r/2, rounded down)"
         )
 
 

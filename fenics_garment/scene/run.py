@@ -42,6 +42,7 @@ from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
 from fenics_garment.geometry import surface
+from fenics_garment.geometry.gmsh_utils import time_limit
 from fenics_garment.petsc_options import LINEAR_SOLVERS
 from fenics_garment.progress import ProgressLine, expected_solves
 from fenics_garment.progress import active as active_line
@@ -551,7 +552,10 @@ def solve_stage(
     say("  compiling the forms (FFCx JIT; cached for later runs) ...")
     current_line().stage("JIT: compiling the forms")
     interrupt.set_stage("while compiling the forms")
-    solver = scene_solver(built)
+    hint = "see the dofs above; a coarser garment.mesh_size makes them fewer"
+    what, why = "compiling the forms and allocating the Jacobian", "a hung C compiler or too large"
+    with time_limit(JIT_TIME_LIMIT, what, by="the FFCx JIT", why=why, hint=hint):
+        solver = scene_solver(built)
     solver.progress = _slow_iterations(say)
     frames = _Frames(built, folder, scene.output.vtx and scene.output.every_step)
     times["jit"] = time.perf_counter() - t0
@@ -611,6 +615,11 @@ def solve_stage(
 #: a large problem (``preflight.problem_size``) would otherwise print nothing for minutes between
 #: two dressing steps (the 10 m tube: 97 s an iteration on one rank).
 SLOW_ITERATION_S = 10.0
+#: Seconds the FFCx JIT and the Jacobian's allocation may take before the run stops with one
+#: line (exit 2): the P1-P1 gilet's Jacobian takes 25–60 s of gcc, the 10 m tube's 1.28 M dofs
+#: about 70 s of allocation; another process compiling the same form is waited for
+#: (:mod:`fenics_garment.jit_wait`) within this limit too.
+JIT_TIME_LIMIT = 1800.0
 
 
 def _slow_iterations(say: Callable[..., object]) -> Callable[[int, float, float], None]:
