@@ -261,6 +261,9 @@ class OutputConfig:
     every_step: bool = True  # VTX frame per dressing step (else only the final state)
     error_bars: bool = False  # also solve on a √2× coarser garment: Richardson error bars
     sensor_diameter: float = 0.02  # the round pressure sensor of the regions' sensor_p95 [m]
+    #: the instrument of the sensors at anatomical points (fenics_garment.sensors.INSTRUMENTS:
+    #: "ami", 20 mm air-pack; "picopress", 50 mm)
+    sensor_instrument: str = "ami"
 
 
 @dataclass(frozen=True)
@@ -739,6 +742,9 @@ def _check(s: Scene) -> None:
     o = s.output
     _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
              f"is a sensor's diameter in metres, in (0, 0.2], got {o.sensor_diameter}")  # fmt: skip
+    from fenics_garment.sensors import INSTRUMENTS
+
+    _one_of(o.sensor_instrument, tuple(INSTRUMENTS), src, "output.sensor_instrument")
     _no_control_characters(s)
     _require(_plain_name(s.name), src, "name",
              f"must be a plain folder name (no '/', '\\', control characters, '.' or '..'), "

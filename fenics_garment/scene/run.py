@@ -37,7 +37,7 @@ from pathlib import Path
 
 import numpy as np
 
-from fenics_garment import interrupt, mpi_guard, output
+from fenics_garment import interrupt, mpi_guard, output, sensors
 from fenics_garment._stack import MPI, dolfinx, ufl
 from fenics_garment.contact import pressure as cpressure
 from fenics_garment.contact import uzawa
@@ -289,6 +289,26 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     return region, p[on], a[on], sensor, body
 
 
+def sensor_table(built) -> tuple[list[dict], str | None]:
+    """The sensors at anatomical points (:mod:`fenics_garment.sensors`, ``[output]
+    sensor_instrument``) read from the garment's contact points gathered on all ranks
+    (collective), and why there are none (a body without landmarks) or None."""
+    st, c = built.contact.state, built.contact
+    comm = built.model.geometry.mesh.comm
+    p = c.pressure_values()
+    a = cpressure.point_areas(st, c.area_stretch())
+    x = cpressure.positions(st)
+    parts = comm.allgather((p, a, x))
+    p, a, x = (np.concatenate([q[k] for q in parts]) for k in range(3))
+    try:
+        placed = sensors.place(built.body)
+    except sensors.NoLandmarks as e:
+        return [], str(e)
+    instrument = built.scene.output.sensor_instrument
+    d = sensors.diameter_of(instrument)
+    return sensors.read(placed.centres, x, p * a, a, d, instrument), None
+
+
 def element_warning(variant) -> str | None:
     """The WARNING line for a shell element that has not passed the verification table."""
     if variant.verified:
@@ -480,6 +500,7 @@ def _run_in(
         write_report(folder, comm, say, result.summary)
     state.finish(_status(result))
     _print_regions(say, result.regions)
+    _print_sensors(say, result.summary)
     for c in result.checks:
         if not c.ok:
             say("  " + c.warning())
@@ -853,6 +874,7 @@ def _outputs(
     st = built.contact.state
     p_lumped = cpressure.body_pressure(st, built.contact.traction, built.search_body)
     regions = output.region_table(built.body.regions, *contact_points_by_region(built))
+    sensor_rows, sensors_skipped = sensor_table(built)
     x_g, p_g = garment_arrays(built)  # collective
     eps_g = output.garment_node_values(built.garment, strain)[:, 0]
     reach = 0.75 * scene.garment.mesh_size
@@ -899,7 +921,10 @@ def _outputs(
         },  # LoadStepper's, unused here
         "contact_search_s": st.timings.search_s,
         "regions": regions,
+        "sensors": sensor_rows,  # at anatomical points (fenics_garment.sensors)
     }
+    if sensors_skipped:
+        summary["sensors_skipped"] = sensors_skipped
     fields = {"x_g": x_g, "p_g": p_g, "eps_g": eps_g, "p_body": p_body, "p_lumped": p_lumped}
     return RunResult(Path(), summary, regions, report, built, completed, message, found, fields)
 
@@ -915,6 +940,9 @@ def _write_outputs(folder: Path, built: scene_build.Built, result: RunResult) ->
                                                 "contact_pressure": f["p_g"],
                                                 "membrane_strain_max": f["eps_g"]})  # fmt: skip
         output.write_summary(folder, result.summary, result.regions)
+        if result.summary.get("sensors"):
+            output.write_text(folder / "pressure_sensors.csv",
+                              output.csv_text(result.summary["sensors"]))  # fmt: skip
         _write_body_vtu(folder, built.body, {"contact_pressure": f["p_body"],
                                              "contact_pressure_lumped": f["p_lumped"]})  # fmt: skip
         if scene.output.pictures:
@@ -1007,6 +1035,21 @@ def _pictures(folder: Path, built, garment_xp, p_body: np.ndarray) -> None:
         title = f"{built.scene.name} ({built.scene.garment.fabric})"
         output.pattern_png(folder / "pressure_pattern.png", built.garment.rest, p, title,
                            vmax_kpa=top)  # fmt: skip
+
+
+def _print_sensors(say, summary: dict) -> None:
+    """The sensors' readings at anatomical points, or why there are none."""
+    rows = summary.get("sensors") or []
+    if not rows:
+        if summary.get("sensors_skipped"):
+            say(f"  sensors: none ({summary['sensors_skipped']})")
+        return
+    d = rows[0]["diameter_m"] * 1e3
+    say(f"  {'sensor':<16} {'kPa':>6} {'mmHg':>6}   ({rows[0]['instrument']}, {d:.0f} mm; "
+        "* = pad covered in part)")  # fmt: skip
+    for r in rows:
+        mark = "" if r["covered"] else " *"
+        say(f"  {r['sensor']:<16} {r['reading_kPa']:6.2f} {r['reading_mmHg']:6.1f}{mark}")
 
 
 def _print_regions(say, regions: list[dict]) -> None:
