@@ -32,8 +32,9 @@ from fenics_garment.scene.preflight import PreflightError
 STATE = "run.json"
 LOCK = ".lock"
 #: What a run writes into its folder (a fresh run removes these, nothing else).
-OUTPUT_FILES = ("summary.json", "pressure_regions.csv", "final_state.xdmf", "body_pressure.vtu",
-                "pressure_garment.png", "pressure_body.png", "scene_used.toml", "report.html",
+OUTPUT_FILES = ("summary.json", "pressure_regions.csv", "pressure_sensors.csv",
+                "final_state.xdmf", "body_pressure.vtu", "pressure_garment.png",
+                "pressure_body.png", "scene_used.toml", "report.html",
                 "report_surfaces.npz", "drape.png", STATE)  # fmt: skip
 OUTPUT_DIRS = ("dressing.bp", "drape.bp", "checkpoint")
 NESTED = "coarse_level"  # the error bars' coarse run, a run folder of its own
