@@ -207,7 +207,7 @@ def read(
             "reading_kPa": units.pa_to_kpa(p), "reading_mmHg": units.pa_to_mmhg(p),
             "force_N": f, "points": len(j),
         })  # fmt: skip
-        rows[-1].update(_cover(tree, ci, area, r))
+        rows[-1].update(_cover(tree, ci, r))
     return rows
 
 
@@ -217,11 +217,12 @@ NEIGHBOURS = 32
 SECTORS = 8
 
 
-def _cover(tree, centre: Array, area: Array, r: float) -> dict:
+def _cover(tree, centre: Array, r: float) -> dict:
     """How far the garment surrounds a pad of radius ``r``: ``cover`` is the share of
     :data:`SECTORS` equal angular sectors round the centre (in the plane of the garment's
-    points nearby, their two principal directions) holding a garment point within ρ = r + 2 s,
-    s the spacing of the points near the centre (the root of the mean area of its 8 nearest);
+    points nearby, their two principal directions) holding a garment point within ρ = r + s,
+    s the distance to the centre's :data:`NEIGHBOURS`-th nearest garment point (a couple of
+    garment cells: the contact points come in clusters, several at one place on the tube);
     ``covered`` when every sector does (the garment reaches past the pad's rim all round).
 
     The area share Σ a_j / (π r²) was tried and dropped: a pad of a couple of garment cells

@@ -175,3 +175,27 @@ def test_sensor_csv_columns(tmp_path):
     output.write_text(tmp_path / "s.csv", output.csv_text(rows))
     (r,) = list(csv.DictReader((tmp_path / "s.csv").open()))
     assert {"sensor", "x_m", "y_m", "z_m", "diameter_m", "reading_kPa", "reading_mmHg"} <= set(r)
+
+
+@pytest.mark.slow
+def test_gilet_run_reports_its_sensors():
+    """The cotton gilet on the mannequin (4 cm cells, about a minute): every sensor placed and
+    read, in summary.json and pressure_sensors.csv, the pads under the gilet covered."""
+    comm = MPI.COMM_WORLD
+    folder = Path(comm.bcast(tempfile.mkdtemp() if comm.rank == 0 else None, root=0))
+    s = config.load(Path(__file__).parent.parent / "demos" / "cotton_gilet.toml")
+    res = run(replace(s, garment=replace(s.garment, mesh_size=0.04)), folder, quiet=True)
+    assert res.completed and "sensors_skipped" not in res.summary
+    rows = res.summary["sensors"]
+    assert [r["sensor"] for r in rows] == list(sensors.SITES)
+    assert all(r["covered"] and r["diameter_m"] == 0.02 for r in rows)
+    assert all(0 <= r["force_N"] <= res.summary["contact_force_N"] for r in rows)
+    assert max(r["reading_kPa"] for r in rows) > 0.1  # the gilet presses at the bust and waist
+    if comm.rank == 0:
+        got = list(csv.DictReader((res.folder / "pressure_sensors.csv").open()))
+        assert [r["sensor"] for r in got] == list(sensors.SITES)
+        for a, b in zip(got, rows, strict=True):
+            assert float(a["reading_kPa"]) == pytest.approx(b["reading_kPa"], rel=1e-5)
+        assert json.loads((res.folder / "summary.json").read_text())["sensors"][0]["sensor"] == (
+            "bust_left"
+        )
