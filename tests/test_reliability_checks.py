@@ -98,12 +98,13 @@ def test_the_default_tube_passes_every_check(tmp_path):
 
 
 def test_a_multiplier_loop_that_cannot_reach_its_tolerance_keeps_its_answer(tmp_path, capsys):
-    """No multiplier update allowed (``max_updates = 0``) and a tolerance of 1e-6 h: the
-    augmented Lagrangian stops after its first pass with the penetration above it. The run keeps
+    """No multiplier update allowed (``max_updates = 0``) and a tolerance of 1e-4 h (the least
+    ``physics.tolerance`` accepts): the augmented Lagrangian stops after its first pass with the
+    penetration above it. The run keeps
     its last converged state as the answer, writes its outputs and fails the check
     ``multiplier_penetration`` (exit 4), not the dressing (exit 3); the answer is an
     equilibrium (the force balance holds)."""
-    physics = {"contact": "augmented-lagrangian", "tolerance": 1e-6, "max_updates": 0}
+    physics = {"contact": "augmented-lagrangian", "tolerance": 1e-4, "max_updates": 0}
     s = small_tube(physics=physics)
     code = cli.main(["run", _scene_file(tmp_path, s), "-o", str(tmp_path)])
     out = capsys.readouterr().out
@@ -115,7 +116,7 @@ def test_a_multiplier_loop_that_cannot_reach_its_tolerance_keeps_its_answer(tmp_
     check = summary["checks"]["multiplier_penetration"]
     h = fabric("cotton").thickness
     assert not check["ok"]
-    assert check["value"] == pytest.approx(summary["max_penetration_m"] / (1e-6 * h), rel=1e-6)
+    assert check["value"] == pytest.approx(summary["max_penetration_m"] / (1e-4 * h), rel=1e-6)
     assert summary["checks"]["force_balance"]["ok"]
     assert (tmp_path / s.name / "pressure_regions.csv").exists()
     assert (tmp_path / s.name / "final_state.xdmf").exists()

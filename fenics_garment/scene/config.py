@@ -781,13 +781,15 @@ def _check_drape(s: Scene) -> None:
         _require(has_hb, src, "drape.bending",
                  "hysteresis needs the fabric's 2HB (twoHB_gf_cm_per_cm); this fabric has "
                  "none")  # fmt: skip
+    _require(0.01 <= r.pedestal_diameter <= 0.5, src, "drape.pedestal_diameter",
+             f"must be in [0.01, 0.5] m, got {r.pedestal_diameter:g}")  # fmt: skip
     _require(0 < r.pedestal_diameter < r.specimen_diameter <= 1.0, src,
              "drape.specimen_diameter", "must be larger than pedestal_diameter > 0, at most "
              f"1 m; got {r.specimen_diameter:g} and {r.pedestal_diameter:g} m")  # fmt: skip
     overhang = 0.5 * (r.specimen_diameter - r.pedestal_diameter)
-    _require(0 < r.mesh_size <= 0.5 * overhang, src, "drape.mesh_size",
-             f"must be positive, at most half the overhang ({0.5 * overhang:g} m): two cells "
-             f"across the hanging annulus; got {r.mesh_size:g}")  # fmt: skip
+    _require(1e-4 <= r.mesh_size <= 0.5 * overhang, src, "drape.mesh_size",
+             f"must be at least 1e-4 m, at most half the overhang ({0.5 * overhang:g} m): "
+             f"two cells across the hanging annulus; got {r.mesh_size:g}")  # fmt: skip
     _require(0 <= r.imperfection <= 0.1 * overhang, src, "drape.imperfection",
              f"is the seeding waviness's amplitude in [0, {0.1 * overhang:g}] m (a tenth of the "
              f"overhang), got {r.imperfection:g}")  # fmt: skip
@@ -795,7 +797,8 @@ def _check_drape(s: Scene) -> None:
     _require(0 <= r.dc_measured <= 1, src, "drape.dc_measured",
              f"is a drape coefficient in [0, 1] (0: none), got {r.dc_measured:g}")  # fmt: skip
     _require(r.nodes_measured >= 0, src, "drape.nodes_measured", "must be >= 0 (0: none)")
-    _require(r.yield_curvature > 0, src, "drape.yield_curvature", "must be positive [1/m]")
+    _require(1e-3 <= r.yield_curvature <= 1e4, src, "drape.yield_curvature",
+             f"must be in [1e-3, 1e4] 1/m, got {r.yield_curvature:g}")  # fmt: skip
     _require(1 <= r.load_steps <= 1000, src, "drape.load_steps",
              f"must be in [1, 1000], got {r.load_steps}")  # fmt: skip
     _require(1e-5 <= r.pixel <= 0.05 * r.pedestal_diameter, src, "drape.pixel",
