@@ -14,10 +14,10 @@ And a fairness measure of a skirt (:func:`skirt_bulge`): no bulge between hem an
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import numpy.typing as npt
-
-from dataclasses import dataclass
 
 from .errors import GeometryError
 
