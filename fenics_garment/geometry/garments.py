@@ -401,9 +401,9 @@ def _build(
     ``order``: geometry degree of the mesh handed to DOLFINx (1 straight, 2 curved: module doc).
     ``refine``: smaller cells along some edges (:class:`EdgeRefinement`), or None.
 
-    ``max_degree``: the loft's degree cap (see :func:`add_loft`); the dress needs 3 (measured at
-    h = 3 cm: OCC's default folds the skirt across the axis, 423 triangles, min angle 3.3°;
-    degree 3: no fold, min angle 8.7°; degree 2: no fold but 0.6°).
+    ``max_degree``: the loft's degree cap (see :func:`add_loft`); the dress without guide rings
+    needs 3 (measured at h = 3 cm: OCC's default folds the skirt across the axis, 423
+    triangles, min angle 3.3°; degree 3: no fold, min angle 8.7°; degree 2: no fold but 0.6°).
     """
     if order not in (1, 2):
         raise ValueError(f"garment geometry order must be 1 or 2, got {order}")
@@ -961,6 +961,13 @@ def make_dress(
     The skirt sections are the hip section offset further, linearly in height, so that the hem
     girth is ``(1 + ease_hip + flare) ×`` the hip girth; rows ``skirt_k`` of the table report
     that against the hip girth. ``princess``: princess seams as in :func:`make_gilet`.
+
+    ``guide`` [m] (None: :data:`SKIRT_GUIDE`): the skirt, hem to hip, is lofted through monotone
+    guide rings this far apart (:func:`~.mannequin.guide_rings`) with OCC's default degree;
+    0 gives the former loft of degree ≤ 3 through the levels only, which bulges the skirt
+    3.6–5.4 cm between its levels (:func:`~.garment_checks.skirt_bulge`, measured on the human
+    and five MakeHuman bodies at h = 3 cm; tests/test_skirt_fairness.py). Guide rings above
+    the hip folded the bodice where its levels are close (under-bust and bust).
     """
     guide = SKIRT_GUIDE if guide is None else guide
     e = _ease_dict(ease, DRESS_EASE)
