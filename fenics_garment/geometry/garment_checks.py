@@ -8,9 +8,13 @@ itself; either would give a meaningless contact problem, so both are refused wit
   horizontally, nor outside the levels' height range (plus a margin);
 * **no fold**: across every edge shared by two cells, the outward cell normals turn by less
   than ``MAX_TURN`` degrees (a fold turns the surface by about 180°).
+
+And a fairness measure of a skirt (:func:`skirt_bulge`): no bulge between hem and waist.
 """
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import numpy.typing as npt
@@ -82,3 +86,93 @@ def check_garment(
             f"the {kind} surface folds: neighbouring cells turn by {turn:.0f}° "
             f"(> {MAX_TURN:.0f}°); check the body's landmarks or use a finer mesh_size"
         )
+
+
+#: largest skirt bulge [m] (:func:`skirt_bulge`) a generated dress may have
+MAX_BULGE = 0.005
+
+
+@dataclass
+class Fairness:
+    """:func:`skirt_bulge`'s answer, lengths in metres.
+
+    ``bulge``: the largest rise of the radius going up (module doc of :func:`skirt_bulge`);
+    ``bulge_z`` and ``bulge_angle`` (degrees, from +x towards +y) where it is;
+    ``concavity``: the largest depth of a ring inside its convex hull."""
+
+    bulge: float
+    bulge_z: float
+    bulge_angle: float
+    concavity: float
+
+
+def _ring_radii(
+    points: Array, cells: npt.NDArray[np.int64], z: float, axis: Array, angles: Array
+) -> tuple[Array, float] | None:
+    """The radius about ``axis`` of the surface's horizontal section at ``z`` at ``angles``
+    (the outermost crossing per angle, interpolated periodically), and the section's depth
+    inside its convex hull; None if the plane misses the surface."""
+    from scipy.spatial import ConvexHull
+
+    tri = cells if cells.shape[1] == 3 else np.vstack([cells[:, [0, 1, 2]], cells[:, [0, 2, 3]]])
+    d = points[:, 2] - z
+    pts = []
+    for a, b in ((0, 1), (1, 2), (2, 0)):
+        i, j = tri[:, a], tri[:, b]
+        x = (d[i] < 0) != (d[j] < 0)
+        t = d[i[x]] / (d[i[x]] - d[j[x]])
+        pts.append(points[i[x], :2] + t[:, None] * (points[j[x], :2] - points[i[x], :2]))
+    p = np.vstack(pts) - axis
+    if len(p) < 8:
+        return None
+    th = np.arctan2(p[:, 1], p[:, 0])
+    r = np.hypot(p[:, 0], p[:, 1])
+    order = np.argsort(th)
+    radii = np.interp(angles, th[order], r[order], period=2 * np.pi)
+    hull = ConvexHull(p)
+    eq = hull.equations  # n·x + c <= 0 inside; depth = least distance to a hull facet
+    depth = float(np.max(np.min(-(p @ eq[:, :2].T + eq[:, 2]), axis=1)))
+    return radii, depth
+
+
+def skirt_bulge(
+    points: Array,
+    cells: npt.NDArray[np.int64],
+    z_hem: float,
+    z_top: float,
+    axis: Array,
+    step: float = 0.01,
+    bins: int = 72,
+) -> Fairness:
+    """Fairness of a skirt between its hem ``z_hem`` and ``z_top`` (the waist) [m].
+
+    The surface is cut by horizontal planes ``step`` apart (from 5 mm above the hem to 5 mm
+    below ``z_top``); each section's radius r(θ, z) about the vertical line through ``axis``
+    (x, y) is taken in ``bins`` polar angle bins. A skirt hangs from the waist over the hips and
+    flares to the hem, so at every angle its radius does not grow going up: a **bulge** is a
+    radius larger than one lower down at the same angle,
+
+        bulge = max over θ, z of  r(θ, z) − min over z_hem ≤ z' ≤ z of r(θ, z')   [m],
+
+    0 for a fair skirt; limit :data:`MAX_BULGE` (5 mm, a sixth of a 3 cm cell). A body whose
+    belly or buttocks reach out further than its hips above the hip level would give the skirt
+    a true bulge there, so ``z_top`` should be the waist or lower. ``concavity``: the largest
+    depth [m] of a section point inside the section's convex hull (the sections are convex
+    curves; a dent or a ring curling inwards shows here).
+    """
+    angles = -np.pi + (np.arange(bins) + 0.5) * 2 * np.pi / bins
+    zs = np.arange(z_hem + 0.005, z_top - 0.005 + 1e-12, step)
+    rows, depth, used = [], 0.0, []
+    for z in zs:
+        got = _ring_radii(points, cells, float(z), np.asarray(axis, float), angles)
+        if got is None:
+            continue
+        rows.append(got[0])
+        depth = max(depth, got[1])
+        used.append(z)
+    if len(rows) < 2:
+        raise ValueError(f"the surface has fewer than two sections in z = {z_hem} … {z_top}")
+    r = np.array(rows)  # (heights, angles), bottom to top
+    rise = r - np.minimum.accumulate(r, axis=0)
+    k, j = np.unravel_index(int(np.argmax(rise)), rise.shape)
+    return Fairness(float(rise[k, j]), float(used[k]), float(np.degrees(angles[j])), depth)

@@ -115,6 +115,7 @@ def add_loft(
     solid: bool = True,
     max_degree: int = -1,
     guide: float = 0.0,
+    guide_top: float = np.inf,
 ):
     """OCC loft through closed sections; each wire is a back half and a front half.
 
@@ -124,7 +125,8 @@ def add_loft(
 
     ``guide`` > 0 [m]: rings are added between the sections, at most ``guide`` apart, on a
     shape-preserving (monotone, PCHIP) interpolation of the sections' points in height
-    (:func:`guide_rings`), so that the loft cannot overshoot between unevenly spaced sections.
+    (:func:`guide_rings`), so that the loft cannot overshoot between unevenly spaced sections;
+    only between sections at or below ``guide_top`` [m] (the dress: its skirt).
 
     The halves meet at the lateral points (+x and −x), so an open loft yields two faces
     (back first, then front) sharing the side lines; returns the OCC entities made. The halves
@@ -138,13 +140,14 @@ def add_loft(
         p = resample_by_angle(pts, n_pts, centre=pts.mean(axis=0))
         rings.append(np.column_stack([p, np.full(n_pts, z)]))
     if guide > 0:
-        rings = guide_rings(rings, guide)
+        rings = guide_rings(rings, guide, guide_top)
     return loft_rings(g, rings, solid, max_degree)
 
 
-def guide_rings(rings: list[np.ndarray], spacing: float) -> list[np.ndarray]:
+def guide_rings(rings: list[np.ndarray], spacing: float, top: float = np.inf) -> list[np.ndarray]:
     """``rings`` (horizontal, bottom to top, the same number of points from the same angle)
-    with rings added between them at most ``spacing`` apart in height, their points on the
+    with rings added between them (between those at or below ``top`` [m] only) at most
+    ``spacing`` apart in height, their points on the
     monotone piecewise-cubic (PCHIP) interpolation in height of each point's x and y.
 
     A loft is a spline through its sections: between sections unevenly spaced in height it
@@ -163,7 +166,7 @@ def guide_rings(rings: list[np.ndarray], spacing: float) -> list[np.ndarray]:
     out = []
     for z0, z1, ring in zip(z[:-1], z[1:], rings[:-1], strict=True):
         out.append(ring)
-        n = int(np.ceil((z1 - z0) / spacing))
+        n = int(np.ceil((z1 - z0) / spacing)) if z1 <= top else 1
         for zk in z0 + (z1 - z0) * np.arange(1, n) / n:
             out.append(np.column_stack([f(zk), np.full(len(ring), zk)]))
     return [*out, rings[-1]]
