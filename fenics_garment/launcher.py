@@ -25,6 +25,7 @@ The launcher loads no numerical library and does not initialise MPI. Under ``mpi
 
 from __future__ import annotations
 
+import contextlib
 import os
 import shlex
 import shutil
@@ -49,6 +50,8 @@ READY_LIMIT = 300.0
 READY_GUESS = 30.0
 #: Seconds the relays may take to pass the job's last output on after it ended.
 DRAIN = 10.0
+#: seconds to wait for the ranks that outlived a killed mpiexec to be gone (:func:`_end_orphans`)
+ORPHAN_WAIT = 10.0
 #: Exit code of a launch that could not start (no ``mpiexec``): refused, as bad input.
 EXIT_REFUSED = 2
 
@@ -210,13 +213,68 @@ def launch(ranks: int, argv: Sequence[str]) -> int:
     return _exit_code(job, code, ranks, argv)
 
 
+def _descendants(pid: int) -> set[int]:
+    """The processes under ``pid`` (Linux's /proc; empty elsewhere). MPICH's hydra starts its
+    proxies and the ranks each in a session of their own, so once mpiexec is gone they are
+    found by no process group: only by having been seen under it."""
+    found, todo = set(), [pid]
+    while todo:
+        p = todo.pop()
+        try:
+            tasks = os.listdir(f"/proc/{p}/task")
+        except OSError:
+            continue
+        for t in tasks:
+            try:
+                kids = Path(f"/proc/{p}/task/{t}/children").read_text().split()
+            except OSError:
+                continue
+            for k in map(int, kids):
+                if k not in found:
+                    found.add(k)
+                    todo.append(k)
+    return found
+
+
+def _started(pid: int) -> str | None:
+    """The start time of process ``pid`` (field 22 of /proc/pid/stat), None if it is gone: a
+    pid seen under mpiexec is the same process only while this is unchanged."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[19]
+    except (OSError, IndexError):
+        return None
+
+
+def _end_orphans(pids: dict[int, str | None], limit: float = ORPHAN_WAIT) -> None:
+    """SIGKILL the job's processes that outlived mpiexec (a rank still holding the output
+    folder's lock would refuse the ``--resume`` the launcher points to) and wait until they
+    are gone, :data:`ORPHAN_WAIT` seconds at most. Only a pid whose start time is the one seen
+    under mpiexec is signalled (not a later process that got the same pid)."""
+    pids = {p: t for p, t in pids.items() if t is not None and _started(p) == t}
+    for p in pids:
+        with contextlib.suppress(OSError):
+            os.kill(p, signal.SIGKILL)
+    end = time.monotonic() + limit
+    while time.monotonic() < end and any(_started(p) == t for p, t in pids.items()):
+        time.sleep(0.05)
+
+
 def _wait(job: _Job) -> int:
     assert job.proc is not None
+    seen: dict[int, str | None] = {}
+    last = 0.0
     while True:
         try:
-            return job.proc.wait(timeout=0.05)
+            code = job.proc.wait(timeout=0.05)
         except subprocess.TimeoutExpired:
             job.deliver_held()
+            if time.monotonic() - last > 0.5:  # the job's tree, while mpiexec holds it
+                seen |= {p: _started(p) for p in _descendants(job.proc.pid) if p not in seen}
+                last = time.monotonic()
+            continue
+        if code < 0:  # mpiexec itself was killed: its ranks may live on, orphaned
+            _end_orphans(seen)
+        return code
 
 
 def _exit_code(job: _Job, code: int, ranks: int, argv: Sequence[str]) -> int:
