@@ -14,10 +14,9 @@ import pytest
 
 from fenics_garment import sensors
 from fenics_garment._stack import MPI
-from fenics_garment.contact import pressure as cpressure
 from fenics_garment.geometry.mannequin import MeshSizes, make_mannequin
 from fenics_garment.scene import config
-from fenics_garment.scene.run import run
+from fenics_garment.scene.run import gathered_points, run
 from fenics_garment.verification.contact import tube_pressure
 
 TUBE = Path(__file__).parent.parent / "demos" / "tube_on_cylinder.toml"
@@ -141,13 +140,7 @@ def test_sensor_on_the_laplace_tube_reads_t_over_r(tube, instrument):
     """A pad on the cylinder half-way up the tube reads Laplace's p = T/R (the hoop tension of
     the tube stretched to the body's radius, verification.contact.tube_pressure)."""
     b = tube.built
-    st, c = b.contact.state, b.contact
-    comm = b.model.geometry.mesh.comm
-    p = c.pressure_values()
-    a = cpressure.point_areas(st, c.area_stretch())
-    x = cpressure.positions(st)
-    parts = comm.allgather((p, a, x))
-    p, a, x = (np.concatenate([q[k] for q in parts]) for k in range(3))
+    p, a, x = gathered_points(b)
     R = b.scene.body.radius
     s = b.model.stiffness
     z_mid = 0.5 * (x[:, 2].min() + x[:, 2].max())

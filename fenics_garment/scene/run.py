@@ -289,17 +289,22 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     return region, p[on], a[on], sensor, body
 
 
+def gathered_points(built) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(pressure [Pa], deformed area [m²], position [m]) of every garment contact point,
+    gathered on all ranks (collective)."""
+    st, c = built.contact.state, built.contact
+    parts = built.model.geometry.mesh.comm.allgather(
+        (c.pressure_values(), cpressure.point_areas(st, c.area_stretch()), cpressure.positions(st))
+    )
+    p, a, x = (np.concatenate([q[k] for q in parts]) for k in range(3))
+    return p, a, x
+
+
 def sensor_table(built) -> tuple[list[dict], str | None]:
     """The sensors at anatomical points (:mod:`fenics_garment.sensors`, ``[output]
     sensor_instrument``) read from the garment's contact points gathered on all ranks
     (collective), and why there are none (a body without landmarks) or None."""
-    st, c = built.contact.state, built.contact
-    comm = built.model.geometry.mesh.comm
-    p = c.pressure_values()
-    a = cpressure.point_areas(st, c.area_stretch())
-    x = cpressure.positions(st)
-    parts = comm.allgather((p, a, x))
-    p, a, x = (np.concatenate([q[k] for q in parts]) for k in range(3))
+    p, a, x = gathered_points(built)
     try:
         placed = sensors.place(built.body)
     except sensors.NoLandmarks as e:
