@@ -66,6 +66,30 @@ def test_a_failed_pass_is_solved_again_from_its_start_with_the_other_line_search
     assert solver.ls.kind == dressing.RELEASE_LINE_SEARCH  # and the line search put back
 
 
+def test_a_cycling_solve_goes_on_from_its_last_iterate_with_the_other_line_search():
+    """A Newton iteration caught in a cycle (``solve.CYCLING_REASON``) is near the answer: the
+    retry starts where it stopped, not from the start (the dress on f-old: 16 cycling grow
+    steps, each 9 iterations thrown away and the step halved, 244 s; going on with "l2": 88 s)."""
+    q = _Function(3)
+    state = type("St", (), {"refresh": lambda self: None})()
+    solver = _Solver(q)
+    fail = solver.solve
+
+    def cycling():
+        its, reason = fail()
+        return (its, dressing.CYCLING_REASON) if reason <= 0 else (its, reason)
+
+    solver.solve = cycling
+    its, reason = dressing._retrying(solver, q, state)()
+    assert reason > 0 and its == 37
+    assert solver.starts == [(dressing.RELEASE_LINE_SEARCH, 0.0), (dressing.RETRY_LINE_SEARCH, 1.0)]
+    # the grow steps retry cycles only: another failure is returned for the step to be halved
+    q.x.array[:] = 0.0
+    solver.solve, solver.starts = fail, []
+    assert dressing._retrying(solver, q, state, cycles_only=True)() == (30, -5)
+    assert solver.starts == [(dressing.RELEASE_LINE_SEARCH, 0.0)]
+
+
 def test_failed_passes_do_not_count_as_multiplier_updates(monkeypatch):
     """A point on a spring K under a load F (g = −(F − λ)/(K + κ)); every other pass fails.
     With failed passes counted, 6 passes would allow only 3 updates; here 5 updates are made."""
