@@ -209,7 +209,7 @@ def run_one(body: str, garment: str, path: Path, folder: Path = CACHE,
     errors = [ln.strip() for ln in text.splitlines() if ln.lstrip().startswith("error:")]
     rec = {"body": body, "garment": garment, "exit_code": code, "timed_out": timed_out,
            "wall_s": wall, "error": _local(errors[-1][len("error:"):].strip()) if errors else "",
-           "loadavg": os.getloadavg()}  # fmt: skip
+           "loadavg": os.getloadavg(), "commit": _commit()}  # fmt: skip
     if timed_out:
         rec["error"] = _local(f"stopped after {TIMEOUT:.0f} s; last: {text.strip()[-200:]!r}")
     summaries = list(out.glob("*/summary.json"))
@@ -217,6 +217,19 @@ def run_one(body: str, garment: str, path: Path, folder: Path = CACHE,
         rec.update(_from_summary(json.loads(summaries[0].read_text())))
     rec["stage"] = classify(rec)
     return rec
+
+
+def _commit() -> str:
+    """The code that ran: the git commit, with "+" when the work tree differs from it."""
+    git = ["git", "-C", str(scene_bench.ROOT)]
+    try:
+        head = subprocess.run([*git, "rev-parse", "--short", "HEAD"], capture_output=True,
+                              text=True, check=True).stdout.strip()  # fmt: skip
+        dirty = subprocess.run([*git, "status", "--porcelain", "--untracked-files=no"],
+                               capture_output=True, text=True).stdout.strip()  # fmt: skip
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("+" if dirty else "")
 
 
 def _from_summary(sm: dict) -> dict:
