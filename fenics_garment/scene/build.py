@@ -61,7 +61,8 @@ def _make_body(scene: Scene) -> BodySurface:
     from fenics_garment.geometry.measurements import measurements
 
     m = measurements(b.size, **b.measurements)
-    sizes = MeshSizes(coarse=b.mesh_size, fine=b.mesh_size)
+    band = tuple(b.z_range) if b.coarse_size > 0 and b.z_range else None
+    sizes = MeshSizes(coarse=b.coarse_size if band else b.mesh_size, fine=b.mesh_size, band=band)
     if b.human:  # the whole body, segmented as a scan (z_range and legs not used)
         from fenics_garment.geometry.human import make_human
 

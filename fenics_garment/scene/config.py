@@ -74,9 +74,14 @@ class BodyConfig:
     ``measurements`` also takes ``upper_arm_girth``, ``elbow_girth``, ``forearm_girth``,
     ``wrist_girth``, ``head_girth``, ``upper_arm_length``, ``forearm_length``, ``hand_length``),
     segmented as a scan is: a gilet's armholes go round its arm roots, a sleeve follows its left
-    or right arm, a stocking its leg. The whole body is built (``legs`` and ``z_range`` are not
-    used: the segmentation needs the legs, and the contact search crops the body anyway);
-    ``landmarks`` replaces detected heights as for a scan.
+    or right arm, a stocking its leg. The whole body is built (``legs`` is not used and
+    ``z_range`` does not crop: the segmentation needs the legs, and the contact search crops
+    the body anyway); ``landmarks`` replaces detected heights as for a scan.
+
+    ``coarse_size`` (a mannequin): the body is meshed at ``mesh_size`` within ``z_range`` only
+    and at ``coarse_size`` elsewhere, e.g. a human whose legs are fine under a stocking and
+    whose torso, arms and head, which the stocking does not touch, are coarse; 0 (the default):
+    ``mesh_size`` everywhere.
     """
 
     kind: str = "mannequin"
@@ -86,6 +91,7 @@ class BodyConfig:
     human: bool = False  # mannequin: arms (A-pose) and head, segmented like a scan (above)
     z_range: list[float] = field(default_factory=lambda: [0.75, 1.55])  # crop [m]; [] = none
     mesh_size: float = 0.02  # body triangle size [m]
+    coarse_size: float = 0.0  # mannequin: triangle size outside z_range [m] (0: mesh_size)
     file: str = ""  # scan file (kind = "scan"), relative to the scene file
     units: str = ""  # scan units "mm" | "cm" | "dm" | "m" | "in" ("" = detect from the height)
     scale: float = 0.0  # scan: metres per file unit, instead of units (0 = use units)
@@ -412,11 +418,14 @@ LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
     "dressing.release_ratio": (1e-2, 0.9, "", "the spring's factor per release solve"),
     "dressing.grow": (1.0, 10.0, "", "the adaptive schedule's step growth"),
     "body.scale": (1e-6, 1e3, "m per file unit", "0: use units"),
+    "body.coarse_size": (1e-3, 0.1, "m", "a mannequin's triangles outside z_range; 0: "
+                         "mesh_size everywhere"),
     "body.radius": (1e-3, 10.0, "m", "a cylinder body's radius"),
     "body.length": (1e-3, 10.0, "m", "a cylinder body's length"),
 }  # fmt: skip
 #: of the keys above, those where 0 selects a default rule (accepted besides the range)
-ZERO_MEANS_DEFAULT = ("physics.penalty_length", "physics.stick_stiffness", "body.scale")
+ZERO_MEANS_DEFAULT = ("physics.penalty_length", "physics.stick_stiffness", "body.scale",
+                      "body.coarse_size")
 #: Lowest and highest landmark height [m] a scene may set (``body.landmarks``): an ankle is
 #: some 7 cm above the floor, no body is 3 m tall
 MIN_LANDMARK, MAX_LANDMARK = 0.01, 3.0
