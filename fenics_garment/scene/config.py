@@ -424,8 +424,12 @@ LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
     "body.length": (1e-3, 10.0, "m", "a cylinder body's length"),
 }  # fmt: skip
 #: of the keys above, those where 0 selects a default rule (accepted besides the range)
-ZERO_MEANS_DEFAULT = ("physics.penalty_length", "physics.stick_stiffness", "body.scale",
-                      "body.coarse_size")
+ZERO_MEANS_DEFAULT = (
+    "physics.penalty_length",
+    "physics.stick_stiffness",
+    "body.scale",
+    "body.coarse_size",
+)
 #: Lowest and highest landmark height [m] a scene may set (``body.landmarks``): an ankle is
 #: some 7 cm above the floor, no body is 3 m tall
 MIN_LANDMARK, MAX_LANDMARK = 0.01, 3.0
