@@ -105,6 +105,23 @@ def test_reading_is_force_over_area_within_the_pad():
     assert not e["covered"]
 
 
+def test_a_pad_off_the_garment_is_listed_apart():
+    """A pad 1 m from the garment (a torso sensor under a stocking) holds no garment point: the
+    run's table lists it as not under the garment, not as a reading of 0 kPa."""
+    from fenics_garment.scene.run import _print_sensors
+
+    x = np.array([[0.0, 0.0, 0.0], [1e-3, 0.0, 0.0], [0.0, 1e-3, 0.0]])
+    area = np.full(3, 1e-6)
+    centres = {"ankle": np.zeros(3), "bust_left": np.array([0.0, 0.0, 1.0])}
+    rows = sensors.read(centres, x, 1e3 * area, area, 0.02, "ami")
+    assert [r["points"] for r in rows] == [3, 0]
+    lines: list[str] = []
+    _print_sensors(lines.append, {"sensors": rows})
+    assert any(ln.split()[0] == "ankle" for ln in lines)
+    assert not any(ln.split()[0] == "bust_left" for ln in lines)
+    assert lines[-1].strip() == "sensors not under the garment: bust_left"
+
+
 def test_instruments():
     assert sensors.diameter_of("ami") == 0.020 and sensors.diameter_of("picopress") == 0.050
     with pytest.raises(ValueError, match="unknown sensor instrument"):

@@ -1050,11 +1050,16 @@ def _print_sensors(say, summary: dict) -> None:
             say(f"  sensors: none ({summary['sensors_skipped']})")
         return
     d = rows[0]["diameter_m"] * 1e3
-    say(f"  {'sensor':<16} {'kPa':>6} {'mmHg':>6}   ({rows[0]['instrument']}, {d:.0f} mm; "
-        "* = pad covered in part)")  # fmt: skip
-    for r in rows:
+    under = [r for r in rows if r["points"] > 0]  # the others have no garment on their pad
+    if under:
+        say(f"  {'sensor':<16} {'kPa':>6} {'mmHg':>6}   ({rows[0]['instrument']}, {d:.0f} mm; "
+            "* = pad covered in part)")  # fmt: skip
+    for r in under:
         mark = "" if r["covered"] else " *"
         say(f"  {r['sensor']:<16} {r['reading_kPa']:6.2f} {r['reading_mmHg']:6.1f}{mark}")
+    if len(under) < len(rows):
+        off = ", ".join(r["sensor"] for r in rows if r["points"] == 0)
+        say(f"  sensors not under the garment: {off}")
 
 
 def _print_regions(say, regions: list[dict]) -> None:
