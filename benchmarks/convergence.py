@@ -137,7 +137,35 @@ def same_path(rec: dict, stem: str, variant: str) -> bool:
     steps = scene_bench.grow_steps(variant, config_steps(stem))
     return (rec.get("schedule") == schedule_of(stem, variant)
             and rec.get("grow_steps", LEGACY_GROW_STEPS) == steps
-            and rec.get("rest", "loft") == rest_of(stem, variant))  # fmt: skip
+            and rec.get("rest", "loft") == rest_of(stem, variant)
+            and record_body(rec, stem) == body_of(stem, variant))  # fmt: skip
+
+
+def body_of(stem: str, variant: str) -> str:
+    """The body a run of ``stem`` with ``variant`` dresses (:func:`benchmarks.scenes.body_label`;
+    the variant "human" puts a mannequin scene's garment on the human)."""
+    from dataclasses import replace
+
+    from fenics_garment.scene import config
+
+    b = config.load(SCENES / f"{stem}.toml").body
+    if "human" in variant.split("+"):
+        b = replace(b, human=True)
+    return scene_bench.body_label(b)
+
+
+def record_body(rec: dict, stem: str) -> str:
+    """The body of a record; one made before records named it was on the shipped scene's body
+    as it was then: the dress form for a mannequin (the human only with the variant "human")."""
+    if rec.get("body"):
+        return rec["body"]
+    from dataclasses import replace
+
+    from fenics_garment.scene import config
+
+    b = config.load(SCENES / f"{stem}.toml").body
+    human = "human" in str(rec.get("variant", "")).split("+")
+    return scene_bench.body_label(replace(b, human=human))
 
 
 def rest_of(stem: str, variant: str) -> str:

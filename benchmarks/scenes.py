@@ -151,6 +151,7 @@ def child(spec: dict) -> dict:
     _speed_variant(spec)
     s = replace(s, garment=g, physics=phys,
                 output=config.OutputConfig(vtx=False, xdmf=False, pictures=False))  # fmt: skip
+    spec["body"] = body_label(s.body)
     original = scene_build.build
 
     def patched(scene, comm_, body=None):
@@ -175,6 +176,16 @@ def child(spec: dict) -> dict:
     if comm.rank == 0:
         shutil.rmtree(out, ignore_errors=True)  # summary.json etc.: only the record is kept
     return rec
+
+
+def body_label(b) -> str:
+    """What a scene's ``[body]`` is, as the records name it: "human" (the mannequin with arms
+    and head), "dress form" (the torso mannequin), "scan <file name>", "arm" or "cylinder"."""
+    if b.kind == "mannequin":
+        return "human" if b.human else "dress form"
+    if b.kind == "scan":
+        return f"scan {Path(b.file).name}"
+    return b.kind
 
 
 def _speed_variant(spec: dict) -> None:
@@ -226,6 +237,7 @@ def _record(res, spec: dict, comm) -> dict:
         "variant": spec.get("variant", "default"),
         "mesh_size": spec["mesh_size"],
         "rest": sm.get("garment_rest", "loft"),  # the garment's stress-free state
+        "body": spec.get("body"),  # body_label: the human, the dress form, a scan, …
         "cells": sm["garment_cells"],
         "dofs": sm["dofs"],
         "ranks": sm["ranks"],

@@ -7,7 +7,7 @@ from benchmarks import convergence
 
 def test_a_record_of_other_grow_steps_is_not_reused():
     dress = convergence.config_steps("cotton_dress")
-    rec = {"schedule": "fixed", "grow_steps": dress}
+    rec = {"schedule": "fixed", "grow_steps": dress, "body": "human"}
     assert convergence.same_path(rec, "cotton_dress", "default")
     assert not convergence.same_path(rec | {"grow_steps": dress + 1}, "cotton_dress", "default")
     assert not convergence.same_path(rec | {"schedule": "adaptive"}, "cotton_dress", "default")
@@ -16,7 +16,7 @@ def test_a_record_of_other_grow_steps_is_not_reused():
 
 
 def test_records_made_before_grow_steps_were_recorded_count_as_four():
-    old = {"schedule": "fixed"}
+    old = {"schedule": "fixed", "body": "human"}
     for stem in ("cotton_gilet", "cotton_dress"):
         assert convergence.same_path(old, stem, "rest-loft") == (
             convergence.config_steps(stem) == convergence.LEGACY_GROW_STEPS
@@ -26,10 +26,25 @@ def test_records_made_before_grow_steps_were_recorded_count_as_four():
 def test_a_loft_record_is_not_reused_for_a_pattern_garment():
     """Records made before the rest state was recorded are of lofts (the only one then): not
     the answer of a garment made of flat pattern pieces."""
-    old = {"schedule": "fixed", "grow_steps": convergence.config_steps("cotton_dress")}
+    old = {"schedule": "fixed", "grow_steps": convergence.config_steps("cotton_dress"),
+           "body": "human"}  # fmt: skip
     assert convergence.same_path(old, "cotton_dress", "default")  # shipped as a loft
     assert not convergence.same_path(old, "cotton_dress", "rest-pattern")
     assert convergence.same_path(old | {"rest": "pattern"}, "cotton_dress", "rest-pattern")
+
+
+def test_a_record_on_another_body_is_not_reused():
+    """The dress and the gilets are shipped on the human mannequin: a record made before records
+    named their body was on the dress form (the human only with the variant "human") and does
+    not count as the shipped scene's; one that names its body counts on that body."""
+    steps = convergence.config_steps("cotton_dress")
+    old = {"schedule": "fixed", "grow_steps": steps}
+    assert convergence.body_of("cotton_dress", "default") == "human"
+    assert not convergence.same_path(old, "cotton_dress", "default")
+    assert convergence.same_path(old | {"variant": "human"}, "cotton_dress", "human")
+    assert convergence.same_path(old | {"body": "human"}, "cotton_dress", "default")
+    assert not convergence.same_path(old | {"body": "dress form"}, "cotton_dress", "default")
+    assert convergence.body_of("tube_on_cylinder", "default") == "cylinder"
 
 
 def _noise_record(p95: float) -> dict:
