@@ -170,6 +170,19 @@ def test_knees_at_the_construction(body):
         assert limb.marks["thigh"] < limb.marks["knee"] < limb.marks["calf"], side
 
 
+def test_ankles_of_the_footless_legs_at_the_construction(body):
+    """The human's legs end 3 cm below the ankle, without a foot: the leg still narrows where a
+    foot would begin (85 % of the leg), so the ankle is the narrowest section down to the cut's
+    rim (limbs._footless_ankle). Before, it stopped at 85 %: 11 cm from the end, at a 28.2 cm
+    girth against the 22 cm requested, and the stocking's ankle pressure fell from RAL class I
+    (19.9 mmHg on the dress form's legs) to 15.6 mmHg."""
+    z = M.height("ankle")
+    for side in ("left", "right"):
+        limb = body.limbs[f"leg_{side}"]
+        assert limb.point("ankle")[0, 2] == pytest.approx(z, abs=0.02), side
+        assert ConvexHull(limb.sections["ankle"]).area == pytest.approx(M.ankle_girth, rel=0.03)
+
+
 def test_head_and_neck(body):
     """The head's widest horizontal girth is the requested head girth; the neck and the head's
     start (the jaw) lie between the construction's neck level and the head ellipsoid."""

@@ -356,6 +356,8 @@ def leg_marks(
     above the floor (z = 0), for the knee's proportional height (default: ``stature``)."""
     L = s[-1]
     ankle = _pick(s, girth, 0.45 * L, 0.85 * L, np.nanargmin, "ankle (narrowest section)", name)
+    if ankle >= s[s <= 0.85 * L][-1]:  # still narrowing at the window's end: a foot below?
+        ankle = _footless_ankle(s, girth, ankle, name)
     root = _free_root(s, girth, name)
     span = ankle - root
     knee = knee_on_the_leg(s, c, KNEE_HEIGHT * (stature if top is None else top), root, ankle)
@@ -365,6 +367,26 @@ def leg_marks(
     if not thigh < knee:
         raise ScanError(f"{name}: the thigh level is not above the knee")
     return {"thigh": thigh, "knee": knee, "calf": calf, "ankle": ankle}
+
+
+#: A leg that ends without a foot (the parametric human's legs end 3 cm below the ankle; a scan
+#: cut above the feet): its ankle is the narrowest section down to this far from the end [m]
+#: (past the rounded rim of the cut) ...
+FOOTLESS_END = 0.015
+#: ... when no section below it is this much wider (a foot widens the girth by 30 % and more).
+FOOT_WIDENING = 0.05
+
+
+def _footless_ankle(s: Array, girth: Array, ankle: float, name: str) -> float:
+    """The ankle of a leg whose girth still narrows at the end of the search window (85 % of
+    the leg, where a foot would begin): the narrowest section down to :data:`FOOTLESS_END`
+    from the end if no section beyond it widens by :data:`FOOT_WIDENING` (no foot), else
+    ``ankle`` as found."""
+    L = s[-1]
+    far = _pick(s, girth, 0.45 * L, L - FOOTLESS_END, np.nanargmin, "ankle", name)
+    g0 = float(girth[np.flatnonzero(s == far)[0]])
+    below = girth[(s > far) & np.isfinite(girth)]
+    return far if not len(below) or below.max() <= (1 + FOOT_WIDENING) * g0 else ankle
 
 
 def knee_on_the_leg(s: Array, c: Array, z_knee: float, root: float, ankle: float) -> float:
