@@ -180,6 +180,20 @@ def diameter_of(instrument: str) -> float:
     return INSTRUMENTS[instrument]
 
 
+def pad(output) -> tuple[str, float]:
+    """The scene's pressure sensor, (name, pad diameter [m]), from its ``[output]``
+    ``sensor_instrument`` and ``sensor_diameter`` (0: the instrument's own; another diameter
+    makes a pad of that size, named "<instrument>, <d> mm pad"): the one sensor of the regions'
+    sensor p95 and of the sensors at anatomical points."""
+    d = diameter_of(output.sensor_instrument)
+    if output.sensor_diameter in (0.0, d):
+        return output.sensor_instrument, d
+    return (
+        f"{output.sensor_instrument}, {output.sensor_diameter * 1e3:g} mm pad",
+        output.sensor_diameter,
+    )
+
+
 def read(
     centres: dict[str, Array], x: Array, force: Array, area: Array, diameter: float,
     instrument: str = "",

@@ -128,6 +128,16 @@ def test_instruments():
         sensors.diameter_of("kikuhime")
 
 
+def test_one_sensor_for_the_regions_and_the_anatomical_points():
+    """``[output] sensor_instrument`` sets the pad of both the regions' sensor p95 and the
+    sensors at anatomical points; ``sensor_diameter`` (0: the instrument's) another pad size."""
+    out = config.OutputConfig()
+    assert sensors.pad(out) == ("ami", 0.020)
+    assert sensors.pad(replace(out, sensor_instrument="picopress")) == ("picopress", 0.050)
+    assert sensors.pad(replace(out, sensor_diameter=0.020)) == ("ami", 0.020)
+    assert sensors.pad(replace(out, sensor_diameter=0.030)) == ("ami, 30 mm pad", 0.030)
+
+
 def test_unknown_instrument_is_refused(tmp_path):
     text = TUBE.read_text() + '\n[output]\nsensor_instrument = "picopres"\n'
     if "[output]" in TUBE.read_text():

@@ -264,7 +264,7 @@ def regions_section(rows: list[dict], summary: dict) -> str:
             + _table(header, table, text=(0, -1))
             + charts.pressure_chart(rows)
             + f'<p class="small">Points: statistics of the contact pressure in each region; '
-            f"sensor: a sensor of [output] sensor_diameter at the garment's contact points; skin "
+            f"sensor: a sensor of [output] sensor_instrument at the garment's contact points; skin "
             f"sensor: lying on the body. {how} Comfort bands (Gupta &amp; Zakaria 2020, Table "
             f"13.5): {escape('; '.join(bands))}.</p>")  # fmt: skip
 

@@ -266,10 +266,11 @@ class OutputConfig:
     report: bool = True  # report.html: maps, tables, checks, history, 3D view (one file)
     every_step: bool = True  # VTX frame per dressing step (else only the final state)
     error_bars: bool = False  # also solve on a √2× coarser garment: Richardson error bars
-    sensor_diameter: float = 0.02  # the round pressure sensor of the regions' sensor_p95 [m]
-    #: the instrument of the sensors at anatomical points (fenics_garment.sensors.INSTRUMENTS:
-    #: "ami", 20 mm air-pack; "picopress", 50 mm)
+    #: the pressure sensor, one for the regions' sensor p95 and the sensors at anatomical points:
+    #: an instrument (fenics_garment.sensors.INSTRUMENTS: "ami", 20 mm air-pack; "picopress",
+    #: 50 mm) and its pad's diameter [m] (0: the instrument's; another value: a pad of that size)
     sensor_instrument: str = "ami"
+    sensor_diameter: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -394,7 +395,8 @@ ELEMENTS = ("P2B-P2B", "P2B-P2", "P2-P2", "P1-P1")
 #:   contact's and the residual's round-off (the multiplier passes or Newton would run out).
 #: * ``garment.edge_ratio``: edge cells of 1e-300 × the mesh size would make gmsh run out of
 #:   memory: at most 100 times smaller than the mesh size.
-#: * ``output.sensor_diameter``: a pressure sensor from 1 mm (none smaller is made) to 20 cm.
+#: * ``output.sensor_diameter``: a pressure sensor from 1 mm (none smaller is made) to 20 cm; 0:
+#:   the instrument's.
 #: * ``dressing.release_ratio``: 0.01 (a release of the spring in three solves) to 0.9 (110);
 #:   0.999 would take 11,508 solves.
 #: * ``dressing.grow``: the adaptive schedule's step growth, at most tenfold a step.
@@ -414,7 +416,8 @@ LENGTH_RANGES: dict[str, tuple[float, float, str, str]] = {
     "physics.tolerance": (1e-4, 1.0, "", "a fraction of the garment thickness"),
     "dressing.path_tolerance": (1e-10, 1e-2, "", "a fraction of the scene's force scale"),
     "garment.edge_ratio": (1e-2, 1.0, "", "the edge cells' size / mesh_size"),
-    "output.sensor_diameter": (1e-3, 0.2, "m", "a pressure sensor's diameter"),
+    "output.sensor_diameter": (1e-3, 0.2, "m", "a pressure sensor's diameter; 0: the "
+                               "instrument's"),
     "dressing.release_ratio": (1e-2, 0.9, "", "the spring's factor per release solve"),
     "dressing.grow": (1.0, 10.0, "", "the adaptive schedule's step growth"),
     "body.scale": (1e-6, 1e3, "m per file unit", "0: use units"),
@@ -429,6 +432,7 @@ ZERO_MEANS_DEFAULT = (
     "physics.stick_stiffness",
     "body.scale",
     "body.coarse_size",
+    "output.sensor_diameter",
 )
 #: Lowest and highest landmark height [m] a scene may set (``body.landmarks``): an ankle is
 #: some 7 cm above the floor, no body is 3 m tall
@@ -753,8 +757,9 @@ def _check(s: Scene) -> None:
              f"is a fraction of c₀ in [0, 1], got {d.sequence_spring}")  # fmt: skip
     _one_of(s.solver.linear, tuple(LINEAR_SOLVERS), src, "solver.linear")
     o = s.output
-    _require(0 < o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
-             f"is a sensor's diameter in metres, in (0, 0.2], got {o.sensor_diameter}")  # fmt: skip
+    _require(0 <= o.sensor_diameter <= 0.2, src, "output.sensor_diameter",
+             f"is a sensor's diameter in metres, in (0, 0.2] (0: the instrument's), got "
+             f"{o.sensor_diameter}")  # fmt: skip
     from fenics_garment.sensors import INSTRUMENTS
 
     _one_of(o.sensor_instrument, tuple(INSTRUMENTS), src, "output.sensor_instrument")

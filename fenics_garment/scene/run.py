@@ -270,7 +270,7 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     """(body region, pressure [Pa], deformed area [m²], sensor reading [Pa]) of every contact
     point in contact, gathered on all ranks, and the sensors lying on the body
     (:func:`output.body_sensors`); the region is that of the closest body triangle, the sensor
-    reading :func:`output.sensor_pressure` with ``[output] sensor_diameter``."""
+    reading :func:`output.sensor_pressure` with the scene's sensor (:func:`sensors.pad`)."""
     st, c = built.contact.state, built.contact
     comm = built.model.geometry.mesh.comm
     p = c.pressure_values()
@@ -280,7 +280,7 @@ def contact_points_by_region(built) -> tuple[np.ndarray, ...]:
     faces = built.search_body.closest(x[on]).face
     parts = comm.allgather((built.body.region[faces], p, a, x, on))
     region, p, a, x, on = (np.concatenate([q[k] for q in parts]) for k in range(5))
-    radius = 0.5 * built.scene.output.sensor_diameter
+    radius = 0.5 * sensors.pad(built.scene.output)[1]
     sensor = output.sensor_pressure(x[on], x, p * a, a, radius)
     b = built.body
     centres = b.vertices[b.triangles].mean(axis=1)
@@ -309,8 +309,7 @@ def sensor_table(built) -> tuple[list[dict], str | None]:
         placed = sensors.place(built.body)
     except sensors.NoLandmarks as e:
         return [], str(e)
-    instrument = built.scene.output.sensor_instrument
-    d = sensors.diameter_of(instrument)
+    instrument, d = sensors.pad(built.scene.output)
     return sensors.read(placed.centres, x, p * a, a, d, instrument), None
 
 
@@ -1066,7 +1065,7 @@ def _print_regions(say, regions: list[dict]) -> None:
     say(
         f"  {'region':<12} {'contact':>9} {'mean':>6} {'p95':>6} {'max':>6} {'sensor':>6} "
         f"{'skin':>6}  kPa   comfort (p95)   (sensor / skin: p95 of the reading of a sensor "
-        "of [output] sensor_diameter at the contact points / lying on the body)"
+        "of [output] sensor_instrument at the contact points / lying on the body)"
     )
     for r in regions:
         if r["contact_area_m2"] <= 0:
