@@ -153,3 +153,24 @@ def test_the_scan_sleeve_is_checked_against_the_scans_own_facets(tmp_path, monke
         preflight.mesh_resolution(built)
     msg = str(err.value)
     assert "\n" not in msg and "[body.file]" in msg and "body.remesh = true" in msg, msg
+
+
+def test_the_facets_under_a_loose_neckline_are_not_checked(tmp_path, monkeypatch):
+    """The short woman's scan dress was refused for 23.2 mm facets at the neck base (limit
+    23.05 mm, half its radius), where the dress has 25 % ease and does not touch: the facet
+    check looks where the garment is fitted (preflight.LOOSE_EASE), and passes there."""
+    from dataclasses import replace
+
+    from fenics_garment.scene import build, config, preflight
+
+    path = pop.export(pop.by_name("f-short"), tmp_path)
+    scene = config.load(ROOT / "demos" / "scan_dress.toml")
+    scene = replace(scene, body=replace(scene.body, file=str(path)))
+    built = build.build(scene, MPI.COMM_WORLD)
+    r_all, where_all = preflight.smallest_body_radius(built)
+    r, where = preflight.smallest_body_radius(built, pressed=True)
+    assert "neck_base" in where_all and "neck_base" not in where and r > r_all
+    preflight.mesh_resolution(built)  # no PreflightError
+    monkeypatch.setattr(preflight, "LOOSE_EASE", 1.0)  # every level, as before
+    with pytest.raises(preflight.PreflightError, match="neck_base"):
+        preflight.mesh_resolution(built)
