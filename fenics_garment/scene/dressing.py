@@ -564,9 +564,10 @@ def _multipliers(
     with _final_solves(solver):
         solver.set_atol(path_atol)
         al = uzawa.augmented_lagrangian(
-            st, float(contact.kappa.value), solve, tol=tol,
+            st, float(contact.kappa.value), solve, tol=ANSWER_MARGIN * tol,
             max_updates=max_updates, stiffen=contact.kappa, unknown=q,
         )  # fmt: skip
+        al.converged = bool(al.penetration) and al.penetration[-1] <= tol
         solver.set_atol(atol)
         rep.al_updates = max(len(al.penetration) - 1, 0)
         rep.answer_atol = path_atol
@@ -608,6 +609,13 @@ def _multipliers(
             "the last converged state is the answer"
         )
     st.accept_step()
+
+
+#: The multiplier passes (at the path tolerance) aim at this fraction of the penetration
+#: tolerance, so that the answer's solve at the last multipliers, to the tighter tolerance, stays
+#: within it: on the scan dress of f-ideal the passes reached 4.572 µm against 4.6 µm and the
+#: answer's solve moved it to 4.603 µm (+0.7 %): exit 4 for 0.06 % of the tolerance.
+ANSWER_MARGIN = 0.9
 
 
 def _snapshot(q, st, contact) -> tuple[np.ndarray, np.ndarray, float]:
