@@ -104,9 +104,9 @@ PLATEAU = 0.005
 #: ... over more than this height [m] has no apparent extreme: the middle of it is taken
 PLATEAU_SPAN = 0.03
 #: Depth [fraction of the stature] by which the front must recede below the bust's most forward
-#: point, and lie behind its forward envelope at the inframammary fold, for either to count:
-#: 0.2 %, 3.3 mm on a 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and
-#: the front of its chest wobbles by about 1 mm between sections (its facets are 1 cm across).
+#: point for it to count (:func:`bust_level`; the unit of FOLD_CLIFF): 0.2 %, 3.3 mm on a
+#: 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and the
+#: front of its chest wobbles by about 1 mm between sections (its facets are 1 cm across).
 FOLD_DEPTH = 0.002
 #: A drop of the front under the bust points by more than this many FOLD_DEPTHs between two
 #: sections of the fold search (2.5 mm apart on a 1.67 m body) is the underside of a large
@@ -482,12 +482,13 @@ def torso_levels(
       where the waist has no narrowing (:func:`extreme`);
     * hip: the greatest prominence of the buttocks (:func:`buttocks_level`) between 3 % of the
       stature above the crotch (below, the tape spans both thighs) and 2 % under the waist;
-      without ``outline`` the widest girth there; abdomen half-way hip–waist; upper chest 40 % of the way from
-      the bust to the shoulder (our convention, as in the parametric mannequin's proportions),
-      and with ``arm_roots`` (a body with arms: ``armpit`` is their root) from the higher of
-      bust and armpit: a section just above the armpits is mostly arm root (on the MakeHuman
-      base mesh 1.22 m of tape 4 mm above them, against 0.89 m 5 cm higher, clipped to the
-      arm cuts alike), and a garment lofted through it bulges round the arms."""
+      without ``outline`` the widest girth there; abdomen half-way hip–waist; upper chest 40 %
+      of the way from the bust to the shoulder (our convention, as in the parametric
+      mannequin's proportions), and with ``arm_roots`` (a body with arms: ``armpit`` is their
+      root) from the higher of bust and armpit: a section just above the armpits is mostly arm
+      root (on the MakeHuman base mesh 1.22 m of tape 4 mm above them, against 0.89 m 5 cm
+      higher, clipped to the arm cuts alike), and a garment lofted through it bulges round the
+      arms."""
     span = armpit - crotch
     zs = np.linspace(crotch + 0.005 * H, armpit - 0.002 * H, 90)
     g = np.array([girth(z) for z in zs])
