@@ -30,13 +30,15 @@ centred near x = 0), not from fixed fractions of the stature:
   the upper arms never count; below the armpits the torso outline is on its own.
 * **Bust**: the level of the bust points, the most forward points of the chest going down
   from the armpits (ISO 8559-1 bust girth: across the bust points); **under-bust**: just below
-  the breasts, at the inframammary fold — the front under the bust points recedes below them
-  and comes forward again (a small breast), or drops off the breast's underside (a large one);
+  the breasts, at the inframammary fold — the corner of the front profile under the bust
+  points, the point deepest behind its forward envelope (a small breast or a large one);
   on a flat chest, a fixed share of the way from the bust to the waist; **waist**: the natural
   waist, the narrowest torso girth below the under-bust (the middle of a plateau, :func:`extreme`,
-  where there is no narrowing); **hip**: the widest girth between the thighs and the waist
-  (:func:`torso_levels`). Calf and ankle: the widest / narrowest leg girths; knee: the middle of
-  the narrow stretch above the calf (:func:`leg_levels`).
+  where there is no narrowing); **hip**: the level of the buttocks' greatest prominence, their
+  rearmost point between the thighs and the waist
+  (:func:`torso_levels`). Knee: the kneecap, the most prominent point of the leg's front
+  profile (ISO 8559-1 mid-patella); calf and ankle: the widest / narrowest leg girths below it
+  (:func:`leg_levels`).
 * Validated on MakeHuman's population against its own measuring loops and ISO 8559-1 levels
   measured independently (``benchmarks/landmarks.py``, ``tests/test_population_landmarks.py``).
 * **Limbs** (:mod:`.limbs`): each arm and leg followed along its own centreline, its sections
@@ -85,29 +87,39 @@ NECK_DIP = 0.05
 #: shoulders' slope (MakeHuman's bodies: 1.10–1.23 at 60 % of the way from the shoulder points
 #: up to the neck, and up to 2.4 × at the shoulder points)
 NECK_BASE_FLARE = 1.25
-#: a calf is a widest leg girth this much above the girth at the top of its range (below the
-#: knee); MakeHuman's: 0.3548 m at 0.343 m against 0.3494 m at 0.441 m, +1.5 % (leg_levels)
-CALF_BULGE = 1.01
-#: The knee: the middle of the narrow stretch between the calf and the crotch, where the leg's
-#: tape girth is within this ratio of its minimum there (a smooth knee has a plateau, not a
-#: sharp minimum). (A rule calibrated on MakeHuman's knee measuring loop — the girth risen 5 %
-#: above the narrowing — was tried and dropped: fitted to the reference it is checked against,
-#: and 6.3 cm above the rig's knee joint on the base mesh.)
-KNEE_PLATEAU = 1.02
+#: The kneecap is looked for between the calf and this share of the way from the calf up to the
+#: crotch: the knee joint lies at 0.285 of the stature (:data:`~.limbs.KNEE_HEIGHT`), the calf
+#: about 0.21 and the crotch 0.47 (Drillis & Contini's proportions), 30 % of the way; the top
+#: of the patella 3–4 cm higher. Above it the thigh's muscles bulge forward too (the vastus
+#: medialis and rectus femoris: MakeHuman's muscular men 4–7 mm over the chord, more than their
+#: kneecap) — a wider window finds them instead (:func:`kneecap`).
+KNEE_REACH = 0.4
+#: A kneecap stands at least this far [fraction of the stature] in front of the straight line
+#: from the shin's front to the thigh's front (MakeHuman's population: 3.5–29 mm; 1 mm on a
+#: 1.67 m body is below a scan's noise); a leg with less (the human mannequin's lofted leg,
+#: straight from thigh to ankle) shows no knee: the proportional height is taken.
+KNEECAP_MIN = 0.0006
 #: :func:`extreme`: a girth within this share of the narrowest (widest) ...
 PLATEAU = 0.005
 #: ... over more than this height [m] has no apparent extreme: the middle of it is taken
 PLATEAU_SPAN = 0.03
 #: Depth [fraction of the stature] by which the front must recede below the bust's most forward
-#: point, and come forward again below the inframammary fold, for either to count: 0.2 %, 3.3 mm
-#: on a 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and
-#: the front of its chest wobbles by about 1 mm between sections (its facets are 1 cm across).
+#: point for it to count (:func:`bust_level`; the unit of FOLD_CLIFF): 0.2 %, 3.3 mm on a
+#: 1.67 m body. The fold under the MakeHuman base mesh's small breasts is 4–6 mm deep, and the
+#: front of its chest wobbles by about 1 mm between sections (its facets are 1 cm across).
 FOLD_DEPTH = 0.002
 #: A drop of the front under the bust points by more than this many FOLD_DEPTHs between two
 #: sections of the fold search (2.5 mm apart on a 1.67 m body) is the underside of a large
 #: breast seen from the front: the fold is just below it (MakeHuman's female body with its
-#: largest cup: 2–3 cm a step at the breast's lower edge; elsewhere below 0.3 cm a step).
+#: largest cup: 2–3 cm a step at the breast's lower edge; elsewhere below 0.3 cm a step), where
+#: the breast's lower part leaves the torso's outline and the profile under it is cut short.
 FOLD_CLIFF = 4.0
+#: The inframammary fold lies at least this far [fraction of the stature] behind the front
+#: profile's envelope (1 mm on a 1.67 m body, the shallowest dent a tape shows): the breast's
+#: fold is 4–30 mm deep on MakeHuman's women, the lower edge of the pectoral muscle 1.6–4 mm on
+#: its men — there MakeHuman's underbust loop passes 0.8–2 cm from it, against 1.4–4.8 cm from
+#: the flat-chest rule (FLAT_UNDERBUST); a chest without either has no fold.
+FOLD_MIN_DEPTH = 0.0006
 #: How far below the bust point the fold is looked for [fraction of the stature]: the lower half
 #: of a breast, 2.5 cm (MakeHuman's base mesh) to 8 cm (its female body with the largest cup);
 #: 6 %, 10 cm on a 1.67 m body. A flat chest has none within it.
@@ -468,13 +480,15 @@ def torso_levels(
     * waist: the narrowest girth between a quarter of the crotch–armpit span and the under-bust
       (1 % of the stature below it), at most three quarters up the span; the middle of a plateau
       where the waist has no narrowing (:func:`extreme`);
-    * hip: the widest girth between 3 % of the stature above the crotch (below, the tape spans
-      both thighs) and the waist; abdomen half-way hip–waist; upper chest 40 % of the way from
-      the bust to the shoulder (our convention, as in the parametric mannequin's proportions),
-      and with ``arm_roots`` (a body with arms: ``armpit`` is their root) from the higher of
-      bust and armpit: a section just above the armpits is mostly arm root (on the MakeHuman
-      base mesh 1.22 m of tape 4 mm above them, against 0.89 m 5 cm higher, clipped to the
-      arm cuts alike), and a garment lofted through it bulges round the arms."""
+    * hip: the greatest prominence of the buttocks (:func:`buttocks_level`) between 3 % of the
+      stature above the crotch (below, the tape spans both thighs) and 2 % under the waist;
+      without ``outline`` the widest girth there; abdomen half-way hip–waist; upper chest 40 %
+      of the way from the bust to the shoulder (our convention, as in the parametric
+      mannequin's proportions), and with ``arm_roots`` (a body with arms: ``armpit`` is their
+      root) from the higher of bust and armpit: a section just above the armpits is mostly arm
+      root (on the MakeHuman base mesh 1.22 m of tape 4 mm above them, against 0.89 m 5 cm
+      higher, clipped to the arm cuts alike), and a garment lofted through it bulges round the
+      arms."""
     span = armpit - crotch
     zs = np.linspace(crotch + 0.005 * H, armpit - 0.002 * H, 90)
     g = np.array([girth(z) for z in zs])
@@ -502,7 +516,10 @@ def torso_levels(
     if not sel.any():
         raise ScanError(f"no torso section between {lo:.3f} and {hi:.3f} m")
     waist = extreme(zs[sel], g[sel], widest=False)
-    hip = arg(np.argmax, crotch + 0.03 * H, waist - 0.02 * H)  # not the span across the thighs
+    lo, hi = crotch + 0.03 * H, waist - 0.02 * H  # above: not the span across the thighs
+    hip = None if outline is None else buttocks_level(outline, lo, hi, H)
+    if hip is None:  # no outline to read the buttocks from: the widest girth
+        hip = arg(np.argmax, lo, hi)
     return {
         "hip": hip,
         "abdomen": 0.5 * (hip + waist),
@@ -511,6 +528,22 @@ def torso_levels(
         "bust": bust,
         "upper_chest": (top := max(bust, armpit) if arm_roots else bust) + 0.4 * (shoulder - top),
     }
+
+
+def buttocks_level(outline, lo: float, hi: float, H: float) -> float | None:
+    """The hip level (ISO 8559-1 hip girth: the horizontal girth at the level of the greatest
+    prominence of the buttocks; ISAK's gluteal girth: their greatest posterior protuberance):
+    between ``lo`` and ``hi``, every 0.2 % of the stature ``H``, the height of the torso
+    outline's rearmost point (+y); None without an outline there.
+
+    Not the widest girth: a belly wider than the buttocks (MakeHuman's short, heavy, flabby old
+    man: his widest girth 7.8 cm above MakeHuman's hip loop) moves the widest girth up to it."""
+    best_z, best_y = None, -np.inf
+    for z in np.arange(lo, hi, 0.002 * H):
+        p = outline(z)
+        if p is not None and float(p[:, 1].max()) > best_y:
+            best_z, best_y = float(z), float(p[:, 1].max())
+    return best_z
 
 
 def _front_of(p: Array, near) -> float | None:
@@ -551,32 +584,49 @@ def bust_level(outline, lo: float, hi: float, H: float) -> tuple[float, float] |
     return best_z, (float(np.mean(gaps)) if gaps else 0.25 * w)
 
 
+def depth_under_envelope(z: Array, f: Array) -> Array:
+    """How far each point (z, f) of a profile lies behind its forward envelope: the upper convex
+    hull of the points (the straight tape laid over the profile's bulges)."""
+    hull: list[int] = []
+    for i in np.argsort(z):
+        while len(hull) >= 2:
+            a, b = hull[-2], hull[-1]
+            if (z[b] - z[a]) * (f[i] - f[a]) - (f[b] - f[a]) * (z[i] - z[a]) >= 0.0:
+                hull.pop()  # b lies on or under the chord a–i
+            else:
+                break
+        hull.append(int(i))
+    return np.interp(z, z[hull], f[hull]) - f
+
+
 def fold_level(outline, bust: float, half_gap: float, lo: float, H: float) -> float | None:
-    """The inframammary fold: going down from the ``bust`` level in steps of 0.15 % of the
-    stature, the front under the bust points (within 35 % of ``half_gap`` of their lateral
-    offset) recedes and then either comes forward again by :data:`FOLD_DEPTH` (the fold is the
-    level where it was furthest back) or drops by :data:`FOLD_CLIFF` FOLD_DEPTHs within one step
-    (a large breast's underside: the fold is just below it). None when neither happens before
-    ``lo`` (a flat chest)."""
+    """The inframammary fold (ISO 8559-1 under-bust girth: just below the breasts, where the
+    breast's lower contour meets the chest wall): on the front profile under the bust points —
+    the most forward reach within 35 % of ``half_gap`` of their lateral offset, every 0.15 % of
+    the stature from the ``bust`` level down to ``lo`` — the point deepest behind the profile's
+    forward envelope (:func:`depth_under_envelope`: the corner under the breast, or under a
+    man's pectoral muscle); just below where the front drops by :data:`FOLD_CLIFF`
+    FOLD_DEPTHs within one step (the underside of a large breast). None when the deepest point
+    lies less than :data:`FOLD_MIN_DEPTH` of the stature behind the envelope (a flat chest)."""
 
     def near(d, w):
         return np.abs(d - half_gap) <= 0.35 * half_gap
 
-    step = 0.0015 * H
-    low_z, low_f, prev = None, np.inf, None
-    for z in np.arange(bust, lo, -step):
+    zs, fs = [], []
+    for z in np.arange(bust, lo, -0.0015 * H):
         p = outline(z)
         f = None if p is None else _front_of(p, near)
         if f is None:
             continue
-        if prev is not None and prev - f > FOLD_CLIFF * FOLD_DEPTH * H:
-            return float(z)
-        if f < low_f:
-            low_z, low_f = float(z), f
-        elif f > low_f + FOLD_DEPTH * H:
-            return low_z
-        prev = f
-    return None
+        if fs and fs[-1] - f > FOLD_CLIFF * FOLD_DEPTH * H:
+            return float(z)  # off the underside of a large breast: the fold is just below
+        zs.append(float(z))
+        fs.append(f)
+    if len(zs) < 3:
+        return None
+    depth = depth_under_envelope(np.array(zs), np.array(fs))
+    k = int(np.argmax(depth))
+    return zs[k] if depth[k] >= FOLD_MIN_DEPTH * H else None
 
 
 def extreme(zs: Array, g: Array, widest: bool) -> float:
@@ -592,32 +642,64 @@ def extreme(zs: Array, g: Array, widest: bool) -> float:
     return float(zs[np.argmax(g) if widest else np.argmin(g)])
 
 
-def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
-    """Left leg (+x), from its horizontal tape girths every 0.5 % of the stature:
+def kneecap(zs: Array, front: Array, lo: float, hi: float, H: float) -> float | None:
+    """The kneecap's most anterior point (ISO 8559-1 knee girth: at the mid-patella): the height
+    where the leg's front profile ``front`` (its most forward reach, −y, at the heights ``zs``)
+    stands furthest in front of the straight line joining the front at ``lo`` (the shin, at the
+    calf) and at ``hi`` (the thigh, :data:`KNEE_REACH`); None if it stands less than
+    :data:`KNEECAP_MIN` of the stature ``H`` in front of it (a straight leg: no kneecap)."""
+    sel = (zs >= lo) & (zs <= hi)
+    if sel.sum() < 3:
+        return None
+    z, f = zs[sel], front[sel]
+    chord = f[0] + (z - z[0]) * (f[-1] - f[0]) / (z[-1] - z[0])
+    k = int(np.argmax(f - chord))
+    return float(z[k]) if f[k] - chord[k] >= KNEECAP_MIN * H else None
 
-    * calf: the widest girth (ISO 8559-1 calf girth) between 12 % of the stature and the
-      narrowing under the knee (the narrowest girth from 2 % of the stature above the widest
-      girth below the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature, up to 5 %
-      of it under the crotch);
-    * knee: the middle of the narrow stretch above the calf (girth within :data:`KNEE_PLATEAU`
-      of its minimum there);
+
+def narrowing_below(zs: Array, g: Array) -> float | None:
+    """The narrowing under the knee: going down from the top of ``zs`` (the kneecap), the
+    narrowest girth ``g`` before the girth grows again by more than :data:`PLATEAU` of it (into
+    the calf); None if it never does (a leg tapering from the knee down to the ankle)."""
+    k_min = len(zs) - 1
+    for k in range(len(zs) - 1, -1, -1):
+        if g[k] < g[k_min]:
+            k_min = k
+        elif g[k] > (1.0 + PLATEAU) * g[k_min]:
+            return float(zs[k_min])
+    return None
+
+
+def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
+    """Left leg (+x), from its horizontal sections every 0.5 % of the stature (tape girth and
+    front profile):
+
+    * knee: the kneecap (:func:`kneecap`, ISO 8559-1 mid-patella), looked for from the widest
+      girth under the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature (above
+      12 % of the stature: the calf's range) up :data:`KNEE_REACH` of the way to the crotch;
+    * calf: the widest girth (ISO 8559-1 calf girth: the maximum girth of the lower leg)
+      between 12 % of the stature and the narrowing under the knee (:func:`narrowing_below`);
+      a leg without one, its girth falling all the way from the knee to the ankle (a thin
+      leg without a calf bulge), keeps the widest girth under the proportional knee height
+      less 2 % of the stature;
     * ankle: the narrowest girth between 3 % of the stature and 3 % under the calf (ISO
       8559-1: the minimum girth above the malleoli);
     * thigh: 3.5 % of the stature under the crotch.
 
     Narrowest and widest girths follow :func:`extreme` (the middle of a plateau).
 
-    A leg without a calf — its widest girth in the calf's range at the top of the range, the
-    leg tapering all the way down, as the human mannequin's lofted leg (knee girth 0.37 m over
-    a 0.35 m calf) — has no narrowing to mark the knee: the knee is then the proportional
-    height, and the calf the widest girth 2 % of the stature below it. (The stature is the
-    body's top above the floor: on a headless scan the proportional height falls short.)"""
+    A leg without a kneecap — straight from thigh to ankle, as the human mannequin's lofted leg
+    (knee girth 0.37 m over a 0.35 m calf) — has nothing to mark the knee: the knee is then the
+    proportional height, and the calf the widest girth 2 % of the stature below it. (The
+    stature is the body's top above the floor: on a headless scan the proportional height falls
+    short.)"""
     zl = np.arange(0.02 * H, crotch - 0.01 * H, 0.005 * H)
-    leg = {}
+    leg, fwd = {}, {}
     for z in zl:
         side = [o for o in outlines(v, t, z) if o.xmin > -0.02 and o.points[:, 0].mean() > 0]
-        if side:
-            leg[float(z)] = sec.tape_girth(side[0].points)  # the largest: the leg, not a hand
+        if side:  # the largest: the leg, not a hand
+            leg[float(z)] = sec.tape_girth(side[0].points)
+            fwd[float(z)] = float(-side[0].points[:, 1].min())
     zk = sorted(leg)
 
     def within(lo: float, hi: float) -> Array:
@@ -631,16 +713,17 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
 
     z_knee = KNEE_HEIGHT * H
     calf_range = within(0.12 * H, z_knee - 0.02 * H)
-    calf = float(calf_range[np.argmax(girths(calf_range))])
-    if leg[calf] > CALF_BULGE * leg[float(calf_range[-1])]:
-        above = within(calf + 0.02 * H, crotch - 0.05 * H)
-        g = girths(above)
-        narrow = above[g <= KNEE_PLATEAU * g.min()]  # a smooth knee has a plateau, not a
-        knee = 0.5 * float(narrow[0] + narrow[-1])  # sharp minimum: its middle
-        calf_range = within(0.12 * H, float(narrow[0]))
-        calf = extreme(calf_range, girths(calf_range), widest=True)
-    else:
+    calf = extreme(calf_range, girths(calf_range), widest=True)
+    zs = np.array(zk)
+    knee = kneecap(zs, np.array([fwd[z] for z in zk]), calf, calf + KNEE_REACH * (crotch - calf), H)
+    if knee is None or knee <= calf + 0.01 * H:
         knee = z_knee
+    else:
+        below = within(0.12 * H, knee)
+        narrow = narrowing_below(below, girths(below))
+        if narrow is not None and narrow > 0.12 * H + 0.02 * H:
+            calf_range = within(0.12 * H, narrow)
+    calf = extreme(calf_range, girths(calf_range), widest=True)
     ankle_range = within(0.03 * H, calf - 0.03 * H)
     ankle = extreme(ankle_range, girths(ankle_range), widest=False)
     return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
