@@ -309,3 +309,27 @@ def test_placed_panel_wraps_and_faces_out(back_out):
     got = rest.cell_flat[0]
     want = np.column_stack([xy[first, 1], -sign * xy[first, 0]])
     assert np.allclose(np.sort(got, axis=0), np.sort(want, axis=0))
+
+
+def test_a_darted_garment_is_written_back_as_its_pattern(torso):
+    """The flat pieces of the darted top (patterns/darted_top.toml: a front with two darts, a
+    back) written back as a pattern (``pattern.export.garment_pattern``): each dart's two legs,
+    which meet at its tip and carry the same name, are two edges of the front sewn to each
+    other (before, they were one edge and the export failed: "a seam joins 1 piece edges")."""
+    from pathlib import Path
+
+    from fenics_garment.pattern.export import garment_pattern
+    from fenics_garment.pattern.io import read_pattern
+
+    root = Path(__file__).resolve().parents[1]
+    pattern = read_pattern(root / "fenics_garment" / "scenes" / "patterns" / "darted_top.toml")
+    gm, _ = pattern_garment(pattern, torso, 0.03)
+    out = garment_pattern(gm, "darted")
+    assert set(out.panels) == {"front", "back"}
+    darts = [s for s in out.seams if s.a.panel == s.b.panel]
+    assert len(darts) == 2
+    for s in darts:
+        edges = out.panels["front"].edges
+        assert s.a.panel == "front" and edges[s.a.edge].name == edges[s.b.edge].name
+        assert edges[s.a.edge].name.startswith("dart") and abs(s.a.edge - s.b.edge) == 1
+    assert len(out.seams) == 6  # and the two side and two shoulder seams

@@ -788,6 +788,10 @@ def _y_mid(levels: dict[str, tuple[float, Array]]) -> float:
 #: with the armholes cut up to the arm roots (3.1 % of the dressed female gilet's contact force
 #: on the arms), 4.5 and 3.7 mm with this clearance (no contact on the arms: exit 0)
 ARMHOLE_CLEARANCE = 0.015
+#: The dress's armholes clear the arm roots by more: it hangs from its straps, and with the
+#: gilet's clearance its armhole edges pressed on the arm roots of MakeHuman's old and teenage
+#: men (0.37 % and 0.15 % of the contact force on the arms, limit 0.1 %)
+DRESS_ARMHOLE_CLEARANCE = 0.025
 #: The narrowest shoulder strap left between the neck and the armhole [m]
 MIN_STRAP = 0.02
 
@@ -802,8 +806,10 @@ def _top_cuts(
     gap: float | None,
     z_lo: float,
     z_hi: float,
+    clearance: float = ARMHOLE_CLEARANCE,
 ) -> tuple[list[_Cut], float, float]:
-    """Armhole ellipsoids at the shoulder tips, neckline scoops, an optional front opening."""
+    """Armhole ellipsoids at the shoulder tips, neckline scoops, an optional front opening;
+    on a segmented body the armholes clear the arm roots by ``clearance``."""
     z_sh, sh = levels["shoulder"]
     z_nb, nb = levels["neck_base"]
     z_uc = body.landmarks["upper_chest"]
@@ -811,7 +817,7 @@ def _top_cuts(
     x_neck = nb[:, 0].max()
     z_bottom = z_uc - arm_drop
     if "armpit" in body.landmarks:  # a segmented body: the armhole reaches below the real armpit
-        drop = max(arm_drop, 2 * ARMHOLE_CLEARANCE)
+        drop = max(arm_drop, 2 * clearance)
         z_bottom = min(z_bottom, body.landmarks["armpit"] - drop)
     zc = z_sh + 0.03
     cuts = []
@@ -822,7 +828,7 @@ def _top_cuts(
         # (the planes through the armpits), the strap narrowed to what is left between it
         # and the neck, so that the garment clears the arms
         x_root = min(abs(float(r[0])) for r in roots)
-        x_in = min(x_in, x_root - ARMHOLE_CLEARANCE)
+        x_in = min(x_in, x_root - clearance)
         if x_in - x_neck < MIN_STRAP:
             # the neckline's ease gives way first: it narrows towards the neck itself (the
             # heavy, muscular man's neck base is 41 cm wide, 4 cm from each arm root: with the
@@ -832,7 +838,7 @@ def _top_cuts(
                 raise GeometryError(
                     f"no room for a shoulder strap: {(x_root - x_body) * 100:.1f} cm from the "
                     f"base of the neck to the arm root, at least "
-                    f"{(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
+                    f"{(MIN_STRAP + clearance) * 100:.1f} cm needed; check the body's "
                     "neck_base and armpit landmarks"
                 )
             x_neck = x_in - MIN_STRAP
@@ -850,7 +856,7 @@ def _top_cuts(
         # either side: the half-width w at the armpit height, Δ below the centre, needs the
         # half-axis w / √(1 − (Δ / c)²) for a vertical half-axis c
         k = np.sqrt(max(1.0 - (0.03 / ax) ** 2, 0.1))
-        y_c, w = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + ARMHOLE_CLEARANCE
+        y_c, w = 0.5 * (root[0] + root[1]), 0.5 * (root[1] - root[0]) + clearance
         c, dz = zc - z_bottom, zc - root[2]
         half = max(w / np.sqrt(1.0 - min(dz / c, 0.9) ** 2), 0.5 * (root[1] - root[0]) + 0.02)
         cuts.append(_Cut("ellipsoid", (s * (x_tip + 0.03), y_c, zc),
@@ -998,7 +1004,16 @@ def make_dress(
     z_hem = levels["skirt_0"][0]
     z_top = levels["neck_base"][0]
     cuts, x_neck, z_arm = _top_cuts(
-        body, levels, strap, armhole_drop, neck_scoop, back_scoop, None, z_hem, z_top
+        body,
+        levels,
+        strap,
+        armhole_drop,
+        neck_scoop,
+        back_scoop,
+        None,
+        z_hem,
+        z_top,
+        DRESS_ARMHOLE_CLEARANCE,
     )
     cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None, princess, _y_mid(levels))
     return _finish(

@@ -119,11 +119,15 @@ def garment_pattern(garment: Any, name: str) -> Pattern:
         cut = next((i for i in range(len(loop)) if labels[i] != labels[i - 1]), 0)
         loop, labels = loop[cut:] + loop[:cut], labels[cut:] + labels[:cut]
         edges, run = [], [loop[0]]
+        seen = {node[loop[0][0]], node[loop[0][2]]}  # the garment nodes of the current run
         for side, label, prev in zip(loop[1:], labels[1:], labels, strict=False):
-            if label != prev:
+            # a new edge where the name changes, and where a seam comes back along itself: the
+            # two legs of a dart meet at its tip and are sewn to each other (same name)
+            if label != prev or (label.startswith("seam:") and node[side[2]] in seen):
                 edges.append((prev, run))
-                run = []
+                run, seen = [], {node[side[0]]}
             run.append(side)
+            seen.add(node[side[2]])
         edges.append((labels[-1], run))
         out = []
         for label, run in edges:

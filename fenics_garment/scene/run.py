@@ -1058,7 +1058,10 @@ def _print_sensors(say, summary: dict) -> None:
         say(f"  {r['sensor']:<16} {r['reading_kPa']:6.2f} {r['reading_mmHg']:6.1f}{mark}")
     if len(under) < len(rows):
         off = ", ".join(r["sensor"] for r in rows if r["points"] == 0)
-        say(f"  sensors not under the garment: {off}")
+        say(
+            f"  sensors with no garment within {d / 2:g} mm (not covered, or the garment stands "
+            f"clear): {off}"
+        )
 
 
 def _print_regions(say, regions: list[dict]) -> None:
