@@ -748,14 +748,14 @@ def _surface_top(v: Array, t: IArray, x: float, y: float) -> float | None:
     p = v[t]
     a, b, c = p[:, 0], p[:, 1], p[:, 2]
     d = (b[:, 1] - c[:, 1]) * (a[:, 0] - c[:, 0]) + (c[:, 0] - b[:, 0]) * (a[:, 1] - c[:, 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore"):  # vertical triangles: d = 0, no hit
         l1 = ((b[:, 1] - c[:, 1]) * (x - c[:, 0]) + (c[:, 0] - b[:, 0]) * (y - c[:, 1])) / d
         l2 = ((c[:, 1] - a[:, 1]) * (x - c[:, 0]) + (a[:, 0] - c[:, 0]) * (y - c[:, 1])) / d
-    l3 = 1.0 - l1 - l2
-    hit = (l1 >= 0) & (l2 >= 0) & (l3 >= 0) & np.isfinite(l1)
-    if not hit.any():
-        return None
-    z = l1 * a[:, 2] + l2 * b[:, 2] + l3 * c[:, 2]
+        l3 = 1.0 - l1 - l2
+        hit = (l1 >= 0) & (l2 >= 0) & (l3 >= 0) & np.isfinite(l1) & np.isfinite(l2)
+        if not hit.any():
+            return None
+        z = l1 * a[:, 2] + l2 * b[:, 2] + l3 * c[:, 2]
     return float(z[hit].max())
 
 
