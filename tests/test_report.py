@@ -94,6 +94,14 @@ def _summary() -> dict:
                    "total": 9.5, "report": 0.25},
         "solver_time_s": {"residual": 1.0, "jacobian": 2.0, "solve": 3.0},
         "error_bars": {"method": "Richardson", "rate": 1.0},
+        "sensors": [{"sensor": "waist_side", "x_m": 0.14, "y_m": 0.0, "z_m": 1.05,
+                     "instrument": "ami", "diameter_m": 0.02, "reading_kPa": 0.731,
+                     "reading_mmHg": 5.48, "force_N": 0.23, "points": 12, "cover": 1.0,
+                     "covered": True},
+                    {"sensor": "bust_left", "x_m": 0.09, "y_m": -0.12, "z_m": 1.2,
+                     "instrument": "ami", "diameter_m": 0.02, "reading_kPa": 0.0,
+                     "reading_mmHg": 0.0, "force_N": 0.0, "points": 0, "cover": 0.0,
+                     "covered": False}],
     }  # fmt: skip
 
 
@@ -114,8 +122,12 @@ def folder(tmp_path: Path) -> Path:
 
 def test_report_has_every_section_and_inlines_its_data(folder: Path):
     html = build_html(folder)
-    for anchor in ("view3d", "maps", "regions", "checks", "dressing", "time", "files"):
+    for anchor in ("view3d", "maps", "regions", "sensors", "checks", "dressing", "time", "files"):
         assert f'id="{anchor}"' in html, anchor
+    # the sensors' readings, and the one with no garment on its pad apart
+    sensors = html[html.index('id="sensors"') : html.index('id="dressing"')]
+    assert "waist_side" in sensors and "0.731" in sensors and "5.48" in sensors
+    assert "No garment within 10 mm of: bust_left" in sensors
     # every picture inlined byte for byte
     for name in ("pressure_body.png", "pressure_garment.png"):
         assert base64.b64encode((folder / name).read_bytes()).decode() in html

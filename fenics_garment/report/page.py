@@ -269,6 +269,35 @@ def regions_section(rows: list[dict], summary: dict) -> str:
             f"13.5): {escape('; '.join(bands))}.</p>")  # fmt: skip
 
 
+def sensors_section(summary: dict) -> str:
+    """The readings of the sensors at anatomical points (:mod:`fenics_garment.sensors`), those
+    with no garment on their pad listed apart, or why there are none."""
+    rows = summary.get("sensors") or []
+    if not rows:
+        why = summary.get("sensors_skipped") or "none in this run"
+        return f'<h2 id="sensors">Sensors</h2><p class="small">No sensors: {escape(why)}.</p>'
+    on = [r for r in rows if r.get("points", 1) > 0]
+    off = [r["sensor"] for r in rows if r.get("points", 1) == 0]
+    table = [[escape(r["sensor"]), _num(r["reading_kPa"]), _num(r["reading_mmHg"]),
+              "yes" if r.get("covered") else f"in part ({r.get('cover', 0):.0%})",
+              f"{r['x_m']:.3f}, {r['y_m']:.3f}, {r['z_m']:.3f}"] for r in on]  # fmt: skip
+    d = rows[0]["diameter_m"] * 1e3
+    note = (
+        f'<p class="small">A round pad of {d:g} mm ({escape(rows[0]["instrument"])}) at '
+        "each point, placed from the body's landmarks; its reading is the contact force on "
+        "the pad over the garment area over it. Covered: the garment reaches past the "
+        "pad's rim all round."
+    )
+    if off:
+        note += f" No garment within {d / 2:g} mm of: {escape(', '.join(off))}."
+    return (
+        '<h2 id="sensors">Sensors at anatomical points</h2>'
+        + _table(["sensor", "kPa", "mmHg", "covered", "centre x, y, z [m]"], table)
+        + note
+        + "</p>"
+    )
+
+
 def _step_row(k: int, s: dict) -> list[str]:
     stage = s.get("stage", "dress")
     where = (f"shrink {s['shrink'] * 1e3:.3g} mm" if stage == "dress"
@@ -355,6 +384,7 @@ def build_html(folder: Path) -> str:
         viewer_section(surfaces),
         maps_section(folder),
         regions_section(region_rows(folder, summary), summary),
+        sensors_section(summary),
         dressing_section(summary),
         time_section(summary),
         files_section(folder),
