@@ -393,7 +393,7 @@ def markdown(data: dict | None = None) -> str:
         out += [
             "",
             "Per run: exit code, wall time [s] (2 ranks, a shared machine: the load "
-            "average is in the record), and the stage of a failure.",
+            "average at its end follows the @), and the stage of a failure.",
             "",
             "| body | " + " | ".join(GARMENTS) + " |",
             "|---" * (len(GARMENTS) + 1) + "|",
@@ -407,6 +407,7 @@ def markdown(data: dict | None = None) -> str:
                     ""
                     if r is None
                     else f"{r['exit_code']} · {r['wall_s']:.0f}"
+                    + (f" @{r['loadavg'][0]:.1f}" if r.get("loadavg") else "")
                     + ("" if r["stage"] == "ok" else f" ({r['stage']})")
                 )
             out.append(f"| {name} | " + " | ".join(row) + " |")
