@@ -1,7 +1,8 @@
 """A torso garment's shoulder strap on a segmented body (``garments._top_cuts``): when the
 neckline's ease leaves less than ``MIN_STRAP`` between the neckline and the armhole (which starts
-``ARMHOLE_CLEARANCE`` inside the arm root), the neckline narrows towards the neck itself; only a
-body whose own neck base leaves no strap is refused, in one line."""
+a clearance inside the arm root), the neckline narrows towards the neck itself and the dress's
+extra clearance gives way to ``ARMHOLE_CLEARANCE``; only a body whose own neck leaves no strap
+is refused, in one line."""
 
 from __future__ import annotations
 
@@ -23,8 +24,8 @@ def human():
 
 
 def _room(body) -> tuple[float, float]:
-    """(half-width of the body's own neck base, x of the nearer arm root) [m]."""
-    x_body = float(body.section("neck_base")[1][:, 0].max())
+    """(half-width of the body's own neck at mid-neck, x of the nearer arm root) [m]."""
+    x_body = float(body.section("neck")[1][:, 0].max())
     x_root = min(abs(float(body.points[f"armpit_{s}"][0])) for s in ("left", "right"))
     return x_body, x_root
 
@@ -45,7 +46,7 @@ def test_a_wide_neckline_gives_way_to_the_strap(human):
 
 
 def test_a_body_without_room_for_a_strap_is_refused_in_one_line(human):
-    """Arm roots moved to 2 cm outside the neck base: no strap fits, whatever the ease."""
+    """Arm roots moved to 2 cm outside the neck: no strap fits, whatever the ease."""
     x_body, _ = _room(human)
     points = dict(human.points)
     for s, side in ((1.0, "left"), (-1.0, "right")):

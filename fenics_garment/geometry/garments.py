@@ -832,16 +832,21 @@ def _top_cuts(
         if x_in - x_neck < MIN_STRAP:
             # the neckline's ease gives way first: it narrows towards the neck itself (the
             # heavy, muscular man's neck base is 41 cm wide, 4 cm from each arm root: with the
-            # dress's 25 % neckline ease there was no strap left)
-            x_body = float(body.section("neck_base")[1][:, 0].max())
-            if x_in - x_body < MIN_STRAP:
+            # dress's 25 % neckline ease there was no strap left), down to the neck's own
+            # section at mid-neck (on a heavy body the neck base's section takes in the
+            # trapezius slope: the short, heavy, flabby old man's was 2.6 cm from his arm roots);
+            # a clearance beyond ARMHOLE_CLEARANCE (the dress's) gives way too
+            level = "neck" if "neck" in body.landmarks else "neck_base"
+            x_body = float(body.section(level)[1][:, 0].max())
+            x_in = max(x_in, min(x_root - ARMHOLE_CLEARANCE, x_body + MIN_STRAP))
+            if x_in - x_body < MIN_STRAP - 1e-9:
                 raise GeometryError(
                     f"no room for a shoulder strap: {(x_root - x_body) * 100:.1f} cm from the "
-                    f"base of the neck to the arm root, at least "
-                    f"{(MIN_STRAP + clearance) * 100:.1f} cm needed; check the body's "
-                    "neck_base and armpit landmarks"
+                    f"neck to the arm root, at least "
+                    f"{(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
+                    f"{level} and armpit landmarks"
                 )
-            x_neck = x_in - MIN_STRAP
+            x_neck = min(x_neck, x_in - MIN_STRAP)
     ax = x_tip + 0.03 - x_in
     for s in (1.0, -1.0):
         root = body.points.get("arm_root_left" if s > 0 else "arm_root_right")
