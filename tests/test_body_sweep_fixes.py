@@ -155,6 +155,7 @@ def test_the_scan_sleeve_is_checked_against_the_scans_own_facets(tmp_path, monke
     assert "\n" not in msg and "[body.file]" in msg and "body.remesh = true" in msg, msg
 
 
+@pytest.mark.slow  # a scan dress built on an exported body: ~45 s
 def test_the_facets_under_a_loose_neckline_are_not_checked(tmp_path, monkeypatch):
     """The short woman's scan dress was refused for 23.2 mm facets at the neck base (limit
     23.05 mm, half its radius), where the dress has 25 % ease and does not touch: the facet
