@@ -175,3 +175,29 @@ def test_the_facets_under_a_loose_neckline_are_not_checked(tmp_path, monkeypatch
     monkeypatch.setattr(preflight, "LOOSE_EASE", 1.0)  # every level, as before
     with pytest.raises(preflight.PreflightError, match="neck_base"):
         preflight.mesh_resolution(built)
+
+
+@pytest.mark.slow  # two scan dresses built on exported bodies (15 s alone)
+def test_a_body_whose_surface_crosses_itself_is_named_as_such(tmp_path):
+    """MakeHuman's short, heavy, flabby old man has thigh and calf overlapping behind the knee:
+    the contact search's pseudonormal sign takes a point 10 cm behind his leg as 110 mm inside
+    it, and the dress was refused as if its loft were that deep in the body. The refusal now
+    says that the surface crosses itself, where, and what to do, checked by the generalised
+    winding number (libigl), an independent inside/outside test. A body that is really inside
+    the loft (the hanging breast of the soft, heavy, max-cup woman: 41 mm) keeps the depth
+    message."""
+    from dataclasses import replace
+
+    from fenics_garment.scene import build, config, preflight
+
+    scene = config.load(ROOT / "demos" / "scan_dress.toml")
+    for name, words in (("m-short-heavy-flabby-old", "crosses itself"),
+                        ("f-maxcup-soft-heavy", "mm inside the body")):  # fmt: skip
+        path = pop.export(pop.by_name(name), tmp_path)
+        built = build.build(replace(scene, body=replace(scene.body, file=str(path))),
+                            MPI.COMM_WORLD)  # fmt: skip
+        with pytest.raises(preflight.PreflightError, match=words) as err:
+            preflight.check_built(built)
+        assert "\n" not in str(err.value)
+        if "crosses" in words:
+            assert "repair the body mesh" in str(err.value)
