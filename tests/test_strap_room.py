@@ -1,7 +1,7 @@
 """A torso garment's shoulder strap on a segmented body (``garments._top_cuts``): when the
 neckline's ease leaves less than ``MIN_STRAP`` between the neckline and the armhole (which starts
-a clearance inside the arm root), the neckline narrows towards the neck itself and the dress's
-extra clearance gives way to ``ARMHOLE_CLEARANCE``; only a body whose own neck leaves no strap
+a clearance inside the arm root), the neckline narrows towards the neck itself and the
+extra clearance gives way to ``MIN_ARMHOLE_CLEARANCE``; only a body whose own neck leaves no strap
 is refused, in one line."""
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ def test_a_wide_neckline_gives_way_to_the_strap(human):
     made, and the fabric at the shoulder line between the neck and the armhole is at least
     MIN_STRAP wide on either side."""
     x_body, x_root = _room(human)
-    assert x_root - gm.ARMHOLE_CLEARANCE - x_body > gm.MIN_STRAP  # the body has room
+    assert x_root - gm.MIN_ARMHOLE_CLEARANCE - x_body > gm.MIN_STRAP  # the body has room
     dress = gm.make_dress(human, ease={"neck_base": 1.5}, h=0.03)
     z_nb = human.landmarks["neck_base"]
     top = dress.points[dress.points[:, 2] > z_nb - 0.01]  # the straps' top

@@ -786,12 +786,13 @@ def _y_mid(levels: dict[str, tuple[float, Array]]) -> float:
 #: (the scan gilet's pattern, ``tests/test_body_sweep_fixes.py``): the nearest point of the
 #: garment to an arm 1.9 mm away on the female body and 1.5 mm on the short, heavy, old woman
 #: with the armholes cut up to the arm roots (3.1 % of the dressed female gilet's contact force
-#: on the arms), 4.5 and 3.7 mm with this clearance (no contact on the arms: exit 0)
-ARMHOLE_CLEARANCE = 0.015
-#: The dress's armholes clear the arm roots by more: it hangs from its straps, and with the
-#: gilet's clearance its armhole edges pressed on the arm roots of MakeHuman's old and teenage
-#: men (0.37 % and 0.15 % of the contact force on the arms, limit 0.1 %)
-DRESS_ARMHOLE_CLEARANCE = 0.025
+#: on the arms), 4.5 and 3.7 mm with 1.5 cm (no contact on the arms: exit 0). 1.5 cm was not
+#: enough on MakeHuman's old and teenage men (the dress: 0.37 % and 0.15 % of the contact force
+#: on the arm roots, limit 0.1 %) nor, after the landmarks moved (the ISO hip, the fold's
+#: under-bust), on the female body (the gilet: 0.12 %): 2.5 cm.
+ARMHOLE_CLEARANCE = 0.025
+#: The least clearance, to which ARMHOLE_CLEARANCE gives way where it leaves no shoulder strap
+MIN_ARMHOLE_CLEARANCE = 0.015
 #: The narrowest shoulder strap left between the neck and the armhole [m]
 MIN_STRAP = 0.02
 
@@ -835,15 +836,15 @@ def _top_cuts(
             # dress's 25 % neckline ease there was no strap left), down to the neck's own
             # section at mid-neck (on a heavy body the neck base's section takes in the
             # trapezius slope: the short, heavy, flabby old man's was 2.6 cm from his arm roots);
-            # a clearance beyond ARMHOLE_CLEARANCE (the dress's) gives way too
+            # a clearance beyond MIN_ARMHOLE_CLEARANCE gives way too
             level = "neck" if "neck" in body.landmarks else "neck_base"
             x_body = float(body.section(level)[1][:, 0].max())
-            x_in = max(x_in, min(x_root - ARMHOLE_CLEARANCE, x_body + MIN_STRAP))
+            x_in = max(x_in, min(x_root - MIN_ARMHOLE_CLEARANCE, x_body + MIN_STRAP))
             if x_in - x_body < MIN_STRAP - 1e-9:
                 raise GeometryError(
                     f"no room for a shoulder strap: {(x_root - x_body) * 100:.1f} cm from the "
                     f"neck to the arm root, at least "
-                    f"{(MIN_STRAP + ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
+                    f"{(MIN_STRAP + MIN_ARMHOLE_CLEARANCE) * 100:.1f} cm needed; check the body's "
                     f"{level} and armpit landmarks"
                 )
             x_neck = min(x_neck, x_in - MIN_STRAP)
@@ -1018,7 +1019,6 @@ def make_dress(
         None,
         z_hem,
         z_top,
-        DRESS_ARMHOLE_CLEARANCE,
     )
     cls = _TorsoClassifier(z_hem, z_top, z_arm, x_neck, None, princess, _y_mid(levels))
     return _finish(
