@@ -144,14 +144,7 @@ def same_path(rec: dict, stem: str, variant: str) -> bool:
 def body_of(stem: str, variant: str) -> str:
     """The body a run of ``stem`` with ``variant`` dresses (:func:`benchmarks.scenes.body_label`;
     the variant "human" puts a mannequin scene's garment on the human)."""
-    from dataclasses import replace
-
-    from fenics_garment.scene import config
-
-    b = config.load(SCENES / f"{stem}.toml").body
-    if "human" in variant.split("+"):
-        b = replace(b, human=True)
-    return scene_bench.body_label(b)
+    return _shipped_body(stem, human=True if "human" in variant.split("+") else None)
 
 
 def record_body(rec: dict, stem: str) -> str:
@@ -159,13 +152,18 @@ def record_body(rec: dict, stem: str) -> str:
     as it was then: the dress form for a mannequin (the human only with the variant "human")."""
     if rec.get("body"):
         return rec["body"]
+    return _shipped_body(stem, human="human" in str(rec.get("variant", "")).split("+"))
+
+
+def _shipped_body(stem: str, human: bool | None) -> str:
+    """The label (:func:`benchmarks.scenes.body_label`) of the shipped scene ``stem``'s body,
+    with ``human`` set to the given value (None: as shipped)."""
     from dataclasses import replace
 
     from fenics_garment.scene import config
 
     b = config.load(SCENES / f"{stem}.toml").body
-    human = "human" in str(rec.get("variant", "")).split("+")
-    return scene_bench.body_label(replace(b, human=human))
+    return scene_bench.body_label(b if human is None else replace(b, human=human))
 
 
 def rest_of(stem: str, variant: str) -> str:

@@ -165,15 +165,23 @@ class DressingFailed(RuntimeError):
         super().__init__(message)
 
 
-def initial_penetration(contact) -> float:
-    """Deepest penetration [m] of the undeformed pattern into the unshrunk body (≤ 0: none)."""
-    st = contact.state
+@contextmanager
+def unshrunk(st):
+    """The contact state refreshed against the unshrunk body (s = 0) inside the block; the
+    shrink put back after it (the gaps are those of s = 0 until the next refresh)."""
     saved = float(st.shrink.value)
     st.shrink.value = 0.0
     st.refresh()
-    pen = uzawa.max_penetration(st)
-    st.shrink.value = saved
-    return pen
+    try:
+        yield st
+    finally:
+        st.shrink.value = saved
+
+
+def initial_penetration(contact) -> float:
+    """Deepest penetration [m] of the undeformed pattern into the unshrunk body (≤ 0: none)."""
+    with unshrunk(contact.state) as st:
+        return uzawa.max_penetration(st)
 
 
 def _force_scale(built, solver: NonlinearSolver) -> float:

@@ -319,13 +319,18 @@ def mannequin_limits(scene) -> None:
 LOOSE_EASE = 0.10
 
 
+def fitted_levels(garment) -> list:
+    """The garment's levels with at most :data:`LOOSE_EASE` of ease (where it can press)."""
+    return [lv for lv in garment.levels if lv.ease <= LOOSE_EASE]
+
+
 def smallest_body_radius(built, pressed: bool = False) -> tuple[float, str]:
     """The smallest radius of the body where the garment is, and where (level name);
     ``pressed``: only where it is fitted (ease at most :data:`LOOSE_EASE`)."""
     sc = built.scene
     if sc.body.kind == "cylinder":
         return sc.body.radius, "cylinder"
-    levels = [lv for lv in built.garment.levels if not pressed or lv.ease <= LOOSE_EASE]
+    levels = fitted_levels(built.garment) if pressed else built.garment.levels
     if not levels:  # a pattern garment that goes round no landmark level
         return math.inf, "no level"
     level = min(levels, key=lambda lv: lv.body_girth)
@@ -365,7 +370,7 @@ def body_facet_size(built) -> float | None:
     from scipy.spatial import cKDTree
 
     sc, body, garment = built.scene, built.body, built.garment
-    fitted = [lv for lv in garment.levels if lv.ease <= LOOSE_EASE]
+    fitted = fitted_levels(garment)
     if sc.body.kind != "scan" or sc.body.remesh or not fitted:
         return None
     level = min(fitted, key=lambda lv: lv.body_girth)
@@ -439,17 +444,13 @@ def self_crossing(built, depth: float) -> np.ndarray | None:
     import igl
 
     from fenics_garment.contact import pressure as cpressure
+    from fenics_garment.scene.dressing import unshrunk
 
-    st = built.contact.state
-    saved = float(st.shrink.value)
-    st.shrink.value = 0.0
-    st.refresh()
-    x = cpressure.positions(st)[st.local_values(st.gap) <= -0.5 * depth]
-    st.shrink.value = saved
-    st.refresh()
+    with unshrunk(built.contact.state) as st:
+        x = cpressure.positions(st)[st.local_values(st.gap) <= -0.5 * depth]
     b = built.body
     if len(x):
-        x = x[np.argsort(np.linalg.norm(x - x.mean(axis=0), axis=1))[:: max(len(x) // 50, 1)]]
+        x = x[:: max(len(x) // 50, 1)]  # at most about 50 of them
         w = igl.winding_number(
             np.asarray(b.vertices, np.float64),
             np.asarray(b.triangles, np.int64),
