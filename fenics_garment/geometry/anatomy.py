@@ -104,9 +104,10 @@ KNEECAP_MIN = 0.0006
 #: MakeHuman's thin or short women: no ISO 8559-1 calf, the maximum girth of the calf, below
 #: the knee) has its calf level this share of the way from the ankle to the knee: the median
 #: over the 31 bodies of MakeHuman's population that have a bulge (0.57–0.93; by this module's
-#: levels, ``benchmarks/landmarks.py``). On the 6 without one, MakeHuman's calf loop lies
-#: −1.4 to +1.9 cm from it and 4.5 cm on the 2.32 m tall thin woman (the widest girth under
-#: the knee, the rule before: 4–15 cm). The parametric mannequin's proportions
+#: levels, ``benchmarks/landmarks.py``). On the 5 without one, against MakeHuman's calf loop:
+#: +0.04, +0.54, +1.89 cm, and +3.85 and +4.48 cm where our knee is itself 3.6 and 1.8 cm off
+#: (the short thin girl, the 2.32 m tall thin woman); the widest girth under the knee, the rule
+#: before: +5.7 to +15.2 cm. The parametric mannequin's proportions
 #: (measurements.py: ankle 0.06, calf 0.205, knee 0.285 of the stature) give 0.644 too.
 CALF_SHARE = 0.644
 #: :func:`extreme`: a girth within this share of the narrowest (widest) ...
@@ -425,9 +426,10 @@ def acromion(
     corner, on the silhouette.
 
     On MakeHuman's 37 bodies against its acromion vertex (``benchmarks/landmarks.py``): within
-    1.5 cm on 35 (the corner alone is 1.3–4.2 cm low on the men, whose deltoids bulge beyond
-    the acromion; the top of the surface over the armpit point, the rule before, 1.5–2.6 cm
-    high on the women, whose armpit lies 1.5–2.5 cm medial of it). None if the arm's top
+    1.5 cm on 35, +2.0 and +2.8 cm on the two teenage girls (the corner alone is 1.3–4.2 cm low
+    on the men, whose deltoids bulge beyond the acromion; the top of the surface over the
+    armpit point, the rule before, 1.5–2.6 cm high on the women, whose armpit lies 1.5–2.5 cm
+    medial of it). None if the arm's top
     never comes down to the armpit's height within reach (a T-pose): the caller keeps the top
     over the armpit."""
     s, z = shoulder_silhouette(v, t, sgn, s_neck, z_armpit - 0.2 * H, z_neck, 0.0015 * H)
