@@ -110,6 +110,25 @@ def test_a_girth_error_is_the_height_error_times_the_girth_s_slope() -> None:
     assert not lm.height_limited(flat)
 
 
+def test_a_flat_chest_s_band_against_a_sphere_and_a_plane() -> None:
+    """``flat_band``: the height over which the front stays within 3 mm of its reach at the
+    nipples. On a sphere of radius r through them it is 2 √(r² − (r − 3 mm)²) (4.86 cm for
+    r = 0.1 m); on a flat front, the whole ±5 cm looked at."""
+    import trimesh
+
+    nip = np.array([[0.0, -0.1, 1.0], [0.0, -0.1, 1.0]])
+    ball = trimesh.creation.icosphere(subdivisions=6, radius=0.1)
+    ball.apply_translation([0.0, 0.0, 1.0])
+    band = lm.flat_band(lm.Tape(np.asarray(ball.vertices), np.asarray(ball.faces)), nip)
+    exact = 2 * np.sqrt(0.1**2 - (0.1 - lm.FLAT_FRONT) ** 2)
+    assert band == pytest.approx(exact, abs=0.005)  # each end to within its 2.5 mm step
+    box = trimesh.creation.box([0.3, 0.2, 0.5])
+    box.apply_translation([0.0, 0.0, 1.0])
+    flat = lm.flat_band(lm.Tape(np.asarray(box.vertices), np.asarray(box.faces)), nip)
+    assert flat == pytest.approx(2 * lm.FLAT_REACH)
+    assert lm.flat_chest({"flat_band": flat}) and not lm.flat_chest({"flat_band": band - 0.02})
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", [_case(n) for n in EXTREMES])
 def test_landmarks_of_extreme_bodies_against_references(name: str) -> None:
