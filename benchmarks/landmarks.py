@@ -631,6 +631,13 @@ def markdown(data: dict | None = None) -> str:
             f"{sum(1 for b in missed if flat_chest(b))} of the {len(missed)} bust height misses "
             "are on them.",
         ]
+        unders = [r["levels"]["underbust"] for r in recs]
+        off = [u for u in unders if abs(u["dz"]) > HEIGHT_TOL]
+        out[-1] += (
+            f" Likewise the under-bust: {sum(1 for u in off if u.get('from') == 'MH loop')} of "
+            f"its {len(off)} height misses are on chests without a fold, where the reference is "
+            "MakeHuman's loop (a convention, not a shape)."
+        )
     return "\n".join(out)
 
 
