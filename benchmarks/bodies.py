@@ -163,7 +163,7 @@ def import_check(b: pop.Body, path: Path) -> dict:
     the body group along MakeHuman's up axis, in metres, computed from the vertices here)."""
     from fenics_garment.geometry.scan import load_scan
 
-    v = pop.body_vertices(b.macro)
+    v = b.vertices
     body = np.unique(np.concatenate(pop.base_mesh().faces()))
     height = 0.1 * float(np.ptp(v[body, 1]))
     t0 = time.perf_counter()
@@ -406,7 +406,9 @@ def markdown(data: dict | None = None) -> str:
     out = [f"A population of {len(bodies)} MakeHuman bodies (CC0 macro targets, "
            "`fenics_garment.geometry.population`) exported as scanners and body tools would "
            f"({', '.join(fmts)}; {', '.join(sorted({b['units'] for b in bodies}))}; up axes "
-           f"{', '.join(sorted({b['up'] for b in bodies}))}; A-pose), each dressed with the "
+           f"{', '.join(sorted({b['up'] for b in bodies}))}; "
+           f"{', '.join(sorted({b.get('pose', 'A') + '-pose' for b in bodies}))}), each dressed "
+           "with the "
            "scan gilet, dress, sleeve and stocking (`demos/scan_*.toml`, the body file "
            "replaced) by `fenics-garment run` on 2 ranks (`python -m benchmarks.bodies sweep`). "
            "A run passes with exit 0 (dressed, every result check passed).", "",
