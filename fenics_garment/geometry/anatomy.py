@@ -142,6 +142,13 @@ FLAT_UNDERBUST = 0.35
 #: The bust points are looked for within this share of the torso's width either side of its
 #: middle (MakeHuman's bodies: 0.26–0.37 at the bust points' level).
 BUST_REGION = 0.45
+#: :func:`acromion`: the arm's top must come down to the armpit's height within this far
+#: [fraction of the stature] out from the armpit's side, the upper arm's length (0.186 of the
+#: stature, Drillis & Contini 1966, D. A. Winter, *Biomechanics and Motor Control of Human
+#: Movement*, 4th ed., Fig. 4.1): an A-posed arm does so before the elbow (MakeHuman's bodies:
+#: 0.064–0.074), a T-posed one only beyond it, at the hand (0.32; the corner of the arm's
+#: silhouette found there lay 15–20 cm out on the arm)
+ACROMION_REACH = 0.186
 #: landmark levels a scene may override (heights in metres above the floor)
 LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
@@ -430,11 +437,11 @@ def acromion(
     on the men, whose deltoids bulge beyond the acromion; the top of the surface over the
     armpit point, the rule before, 1.5–2.6 cm high on the women, whose armpit lies 1.5–2.5 cm
     medial of it). None if the arm's top
-    never comes down to the armpit's height within reach (a T-pose): the caller keeps the top
-    over the armpit."""
+    never comes down to the armpit's height within reach (:data:`ACROMION_REACH`; a T-pose):
+    the caller keeps the top over the armpit."""
     s, z = shoulder_silhouette(v, t, sgn, s_neck, z_armpit - 0.2 * H, z_neck, 0.0015 * H)
     low = np.flatnonzero(z <= z_armpit)
-    if len(s) < 5 or not len(low) or low[0] < 4:
+    if len(s) < 5 or not len(low) or low[0] < 4 or s[low[0]] > s_armpit + ACROMION_REACH * H:
         return None
     s, z = s[: low[0] + 1], z[: low[0] + 1]
     chord = z[0] + (s - s[0]) * (z[-1] - z[0]) / (s[-1] - s[0])
