@@ -28,7 +28,9 @@ code). The targets are vendored in ``meshes/makehuman/targets/macro.npz.xz``: th
 child corners (no baby), dense over the 19,158 vertices of hm08, in MakeHuman's own storage
 unit (int16, 1e-3 of the base mesh's decimetre).
 
-:func:`population` is a set of bodies spanning every macro variable to its extremes;
+:func:`population` is a set of bodies spanning every macro variable to its extremes, all in
+MakeHuman's rest A-pose but four T-posed copies (:attr:`Body.pose`, :func:`posed_vertices`: the
+arms raised by MPFB2's CC0 game-engine rig, :mod:`.rig`);
 :func:`export` writes one as a scanner or body tool would: STL (binary or ascii), PLY (binary or
 ascii), OBJ (quads, with the eyes, as MakeHuman exports) or GLB, in mm, cm, m or inches, with
 any coordinate axis up.
