@@ -1,11 +1,12 @@
 """Landmark heights and girths of the body population against independent references (issue 40,
 item 2).
 
-Every body of :func:`fenics_garment.geometry.population.population` (37 shapes; the turned copies
-are the same shapes) is analysed by :func:`fenics_garment.geometry.anatomy.analyse`, and each
-landmark it finds is compared with a reference that does not come from this package: MakeHuman's
-own measuring loops and points (vertex indices of its base mesh hm08, carried through every morph
-since all bodies share its vertices) and ISO 8559-1:2017 definitions measured here with trimesh
+Every body of :func:`fenics_garment.geometry.population.population` (37 shapes; the turned and
+T-posed copies are the same shapes, left out) is analysed by
+:func:`fenics_garment.geometry.anatomy.analyse`, and each landmark it finds is compared with a
+reference that does not come from this package: MakeHuman's own measuring loops and points
+(vertex indices of its base mesh hm08, carried through every morph since all bodies share its
+vertices) and ISO 8559-1:2017 definitions measured here with trimesh
 sections (:class:`Tape`). Heights are above the floor (the body's lowest vertex); girths are
 horizontal tape girths (the perimeter of the convex hull of a horizontal section's piece, the
 ISO 8559-1 tape that bridges hollows).
@@ -167,8 +168,9 @@ def triangles() -> npt.NDArray[np.int64]:
 
 
 def shapes() -> list[pop.Body]:
-    """The distinct shapes of the population (turned copies left out)."""
-    return [b for b in pop.population() if not b.turn]
+    """The distinct shapes of the population (turned and T-posed copies left out: the
+    references are MakeHuman's, of its rest pose)."""
+    return [b for b in pop.population() if not b.turn and b.pose == "A"]
 
 
 def body_mesh(body: pop.Body) -> tuple[Array, npt.NDArray[np.int64], Array]:
