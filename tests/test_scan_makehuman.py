@@ -361,9 +361,13 @@ LIMB_JOINTS = {
     # starts to widen (measured 4.1 cm before the joint; 3.3 cm off the forearm's axis: the
     # hand turns forward from there)
     "wrist": ("arm", "hand", (0.0, 0.07), 0.04),
-    # the knee: the leg's sharpest bend above the calf (measured 0.7 cm); the rig's knee is
-    # anterior, near the patella (1 cm inside the front of the knee): measured 5.2 cm off
-    "knee": ("leg", "knee", (-0.02, 0.02), 0.06),
+    # the knee: the kneecap's level found on the upright body's sections (ISO 8559-1
+    # mid-patella; the centreline's own sharpest bend, measured 0.7 cm from the joint here,
+    # lay 5–11.6 cm low on 8 of MakeHuman's population bodies), 0.65 cm below the rig's knee
+    # joint: measured −2.1 cm along the slanted leg's axis, which also picks up the joint's
+    # anterior offset (it lies near the patella, 1 cm inside the front of the knee: measured
+    # 5.2 cm off the axis)
+    "knee": ("leg", "knee", (-0.03, 0.02), 0.06),
     # the ankle: the narrowest section above the malleoli, up to 8 cm above the joint (as the
     # horizontal ankle level above; measured 6.2 cm), the joint then in the heel (4.0 cm off)
     "ankle": ("leg", "ankle", (0.0, 0.08), 0.045),
