@@ -85,6 +85,31 @@ def _case(name: str):
     return pytest.param(name, marks=miss)
 
 
+def test_a_girth_error_is_the_height_error_times_the_girth_s_slope() -> None:
+    """On a cone r(z) = r0 + a z, the tape's relative slope is a / r(z) (the polygon's perimeter
+    is proportional to r), and a landmark 1 cm off where the girth changes 4 %/cm misses the
+    2 % girth target within the 1.5 cm height target: the two targets ask for more than each
+    other there (``height_limited``); our girth at our height against the tape there is exact."""
+    import trimesh
+
+    r0, a = 0.05, 0.2  # m, 1: girth slope at z = 0.25 m is a / r = 0.2 / 0.1 = 2 per metre
+    ring = np.array([[r0 + a * z, z] for z in np.linspace(0.0, 0.5, 51)])
+    cone = trimesh.creation.revolve(ring, sections=64)
+    tape = lm.Tape(np.asarray(cone.vertices), np.asarray(cone.faces))
+    z_ref, z_ours = 0.25, 0.26
+    g_ref, g_ours = tape.girth_at("waist", z_ref), tape.girth_at("waist", z_ours)
+    row = {"z": z_ref, "girth": g_ref, "ours_z": z_ours, "ours_girth": g_ours,
+           "dz": z_ours - z_ref, "dg": g_ours / g_ref - 1.0}  # fmt: skip
+    row |= lm.girth_terms(tape, "waist", row)
+    assert row["girth_slope"] == pytest.approx(a / (r0 + a * z_ref), rel=1e-6)
+    assert abs(row["dg_tape"]) < 1e-12
+    assert row["dg"] == pytest.approx(a * 0.01 / (r0 + a * z_ref), rel=1e-6)  # 2 %
+    assert lm.height_limited(row | {"dg": 0.021})
+    assert not lm.height_limited(row | {"dz": 0.016})  # a height miss is a miss of its own
+    flat = row | {"girth_slope": 1.0}  # 1 %/cm: 1.5 % over the height target, within 2 %
+    assert not lm.height_limited(flat)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("name", [_case(n) for n in EXTREMES])
 def test_landmarks_of_extreme_bodies_against_references(name: str) -> None:

@@ -16,8 +16,9 @@ centred near x = 0), not from fixed fractions of the stature:
   through it is the arm root (**arm cut**).
 * **Arms**: the triangles beyond the arm cut that are connected (beyond it) to the most
   lateral point on that side. **Legs**: the rest below the crotch, split at x = 0.
-* **Shoulder points**: the highest point of the surface on the vertical line through each
-  armpit point (the top of the armhole, close to the acromion).
+* **Shoulder points** (acromions): on the shoulders' front silhouette, half-way across from
+  the armpit's side to the silhouette's corner over the arm (:func:`acromion`); in a T-pose,
+  the highest point of the surface on the vertical line through each armpit point.
 * **Neck**: the smallest torso girth between the shoulders and the face lies just under the
   chin; the **head** starts where, going up, the girth first exceeds ``HEAD_FLARE`` × that
   girth (the chin's underside, the menton), or lower where the front comes forward abruptly
@@ -99,6 +100,15 @@ KNEE_REACH = 0.4
 #: 1.67 m body is below a scan's noise); a leg with less (the human mannequin's lofted leg,
 #: straight from thigh to ankle) shows no knee: the proportional height is taken.
 KNEECAP_MIN = 0.0006
+#: A lower leg without a calf bulge (its girth rising from the ankle all the way to the knee,
+#: MakeHuman's thin or short women: no ISO 8559-1 calf, the maximum girth of the calf, below
+#: the knee) has its calf level this share of the way from the ankle to the knee: the median
+#: over the 31 bodies of MakeHuman's population that have a bulge (0.57–0.93; by this module's
+#: levels, ``benchmarks/landmarks.py``). On the 6 without one, MakeHuman's calf loop lies
+#: −1.4 to +1.9 cm from it and 4.5 cm on the 2.32 m tall thin woman (the widest girth under
+#: the knee, the rule before: 4–15 cm). The parametric mannequin's proportions
+#: (measurements.py: ankle 0.06, calf 0.205, knee 0.285 of the stature) give 0.644 too.
+CALF_SHARE = 0.644
 #: :func:`extreme`: a girth within this share of the narrowest (widest) ...
 PLATEAU = 0.005
 #: ... over more than this height [m] has no apparent extreme: the middle of it is taken
@@ -303,6 +313,17 @@ def analyse(
         head = chin if head is None else min(head, chin)
     if head is not None:
         marks["head"] = head
+    if armpit:  # the acromions, from the shoulders' silhouette above the armpits
+        z_base = _neck_base(girth, z_shoulder, narrow)
+        neck = torso_outline(v, t, z_base)
+        for side, sgn in (("left", 1.0), ("right", -1.0)):
+            half = H * 0.03 if neck is None else (neck.xmax if sgn > 0 else -neck.xmin)
+            p = pts[f"armpit_{side}"]
+            found = acromion(v, t, sgn, half, abs(p[0]), armpit[side], z_base + 0.006 * H, H)
+            if found is not None:
+                pts[f"shoulder_{side}"] = np.array([sgn * found[0], p[1], found[1]])
+        z_shoulder = 0.5 * (pts["shoulder_left"][2] + pts["shoulder_right"][2])
+        marks["shoulder"] = z_shoulder
     marks["neck_base"] = _neck_base(girth, z_shoulder, narrow)
     marks["neck"] = 0.5 * (marks["neck_base"] + narrow)  # mid-neck
     marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front, bool(armpit)))
@@ -370,6 +391,54 @@ def _arm_root(
     if o is None:
         return None
     return z_ap, o.points[np.argmax(sgn * o.points[:, 0])]
+
+
+def shoulder_silhouette(
+    v: Array, t: IArray, sgn: float, s0: float, z_lo: float, z_hi: float, step: float
+) -> tuple[Array, Array]:
+    """The shoulder's silhouette seen from the front on one side (``sgn`` +1: +x): at distances
+    ``s`` from the mid-plane, every ``step`` from ``s0`` outwards, the highest point of the
+    body's section by the vertical plane x = sgn s between ``z_lo`` and ``z_hi``; it stops where
+    no point is left. Returns (s, z_top)."""
+    vv = v[:, [1, 2, 0]]  # (y, z, x): slice_loops cuts at constant third coordinate
+    ss, zt = [], []
+    for s in np.arange(s0, s0 + 1.0, step):
+        pieces = sec.slice_loops(vv, t, sgn * s)
+        z = [float(q[(q[:, 1] > z_lo) & (q[:, 1] < z_hi), 1].max(initial=-np.inf)) for q in pieces]
+        if not z or max(z) == -np.inf:
+            break
+        ss.append(s)
+        zt.append(max(z))
+    return np.array(ss), np.array(zt)
+
+
+def acromion(
+    v: Array, t: IArray, sgn: float, s_neck: float, s_armpit: float, z_armpit: float,
+    z_neck: float, H: float,
+) -> tuple[float, float] | None:  # fmt: skip
+    """The acromion on one side (distance from the mid-plane, height), from the front
+    silhouette of the shoulder (:func:`shoulder_silhouette`, from the neck's side at its base,
+    ``s_neck``, up to ``z_neck``, 1 cm above the neck's base): its **corner** is the point
+    standing furthest above the chord from the neck's side to where the arm's top has come
+    down to the armpit's height (in an A-pose; the deltoid's top); the acromion lies half-way
+    across from the armpit's side (``s_armpit``, the torso's lateral extent there) to the
+    corner, on the silhouette.
+
+    On MakeHuman's 37 bodies against its acromion vertex (``benchmarks/landmarks.py``): within
+    1.5 cm on 35 (the corner alone is 1.3–4.2 cm low on the men, whose deltoids bulge beyond
+    the acromion; the top of the surface over the armpit point, the rule before, 1.5–2.6 cm
+    high on the women, whose armpit lies 1.5–2.5 cm medial of it). None if the arm's top
+    never comes down to the armpit's height within reach (a T-pose): the caller keeps the top
+    over the armpit."""
+    s, z = shoulder_silhouette(v, t, sgn, s_neck, z_armpit - 0.2 * H, z_neck, 0.0015 * H)
+    low = np.flatnonzero(z <= z_armpit)
+    if len(s) < 5 or not len(low) or low[0] < 4:
+        return None
+    s, z = s[: low[0] + 1], z[: low[0] + 1]
+    chord = z[0] + (s - s[0]) * (z[-1] - z[0]) / (s[-1] - s[0])
+    corner = float(s[int(np.argmax(z - chord))])
+    mid = 0.5 * (s_armpit + corner)
+    return mid, float(np.interp(mid, s, z))
 
 
 def _arm_root_box(v: Array, t: IArray, x: float, z_ap: float, z_top: float) -> Array:
@@ -680,8 +749,8 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
     * calf: the widest girth (ISO 8559-1 calf girth: the maximum girth of the lower leg)
       between 12 % of the stature and the narrowing under the knee (:func:`narrowing_below`);
       a leg without one, its girth falling all the way from the knee to the ankle (a thin
-      leg without a calf bulge), keeps the widest girth under the proportional knee height
-      less 2 % of the stature;
+      leg without a calf bulge), has its calf :data:`CALF_SHARE` of the way from the ankle to
+      the knee;
     * ankle: the narrowest girth between 3 % of the stature and 3 % under the calf (ISO
       8559-1: the minimum girth above the malleoli);
     * thigh: 3.5 % of the stature under the crotch.
@@ -690,7 +759,7 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
 
     A leg without a kneecap — straight from thigh to ankle, as the human mannequin's lofted leg
     (knee girth 0.37 m over a 0.35 m calf) — has nothing to mark the knee: the knee is then the
-    proportional height, and the calf the widest girth 2 % of the stature below it. (The
+    proportional height, and the calf :data:`CALF_SHARE` of the way up to it. (The
     stature is the body's top above the floor: on a headless scan the proportional height falls
     short.)"""
     zl = np.arange(0.02 * H, crotch - 0.01 * H, 0.005 * H)
@@ -716,16 +785,19 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
     calf = extreme(calf_range, girths(calf_range), widest=True)
     zs = np.array(zk)
     knee = kneecap(zs, np.array([fwd[z] for z in zk]), calf, calf + KNEE_REACH * (crotch - calf), H)
+    bulge = False
     if knee is None or knee <= calf + 0.01 * H:
         knee = z_knee
     else:
         below = within(0.12 * H, knee)
         narrow = narrowing_below(below, girths(below))
         if narrow is not None and narrow > 0.12 * H + 0.02 * H:
-            calf_range = within(0.12 * H, narrow)
+            calf_range, bulge = within(0.12 * H, narrow), True
     calf = extreme(calf_range, girths(calf_range), widest=True)
     ankle_range = within(0.03 * H, calf - 0.03 * H)
     ankle = extreme(ankle_range, girths(ankle_range), widest=False)
+    if not bulge:  # no calf maximum under the knee: the calf's usual share of ankle to knee
+        calf = ankle + CALF_SHARE * (knee - ankle)
     return {"ankle": ankle, "calf": calf, "knee": knee, "thigh": crotch - 0.035 * H}
 
 

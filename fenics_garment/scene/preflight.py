@@ -461,6 +461,22 @@ def self_crossing(built, depth: float) -> np.ndarray | None:
     return next((p for p in found if p is not None), None)
 
 
+def deepest_point(built) -> tuple[np.ndarray, str]:
+    """Where the undeformed garment lies deepest inside the unshrunk body: the point (x, y, z)
+    [m] and the garment's level nearest to it in height, "" without levels (collective)."""
+    from fenics_garment.contact import pressure as cpressure
+    from fenics_garment.scene.dressing import unshrunk
+
+    with unshrunk(built.contact.state) as st:
+        gap = st.local_values(st.gap)
+        x = cpressure.positions(st)
+    mine = (float(gap.min()), x[int(np.argmin(gap))]) if len(gap) else (np.inf, None)
+    _, p = min(built.model.geometry.mesh.comm.allgather(mine), key=lambda a: a[0])
+    levels = getattr(built.garment, "levels", None) or []
+    near = min(levels, key=lambda lv: abs(lv.z - p[2]), default=None)
+    return p, "" if near is None else near.name
+
+
 def initial_depth(built, penetration0: float) -> None:
     """The dressing's shrink s₀ = penetration + margin leaves a body to dress."""
     sc = built.scene
@@ -476,11 +492,16 @@ def initial_depth(built, penetration0: float) -> None:
                 "calf overlapping behind a knee); repair the body mesh (remove its "
                 "self-intersections) and run again"
             )
+        p, level = deepest_point(built)
+        where_in = f" at ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m" + (
+            f", near its level '{level}'" if level else ""
+        )
         raise PreflightError(
             f"{sc.source or sc.name}: the garment starts {penetration0 * 1e3:.3g} mm inside the "
-            f"body; with dressing.margin {sc.dressing.margin * 1e3:.3g} mm the body would have to "
-            f"shrink by {s0 * 1e3:.3g} mm, more than {MAX_SHRINK_OVER_R:.0%} of its smallest "
-            f"radius ({where}, {r * 1e3:.1f} mm), where the contact normal is meaningless; use "
+            f"body{where_in}; with dressing.margin {sc.dressing.margin * 1e3:.3g} mm the body "
+            f"would have to shrink by {s0 * 1e3:.3g} mm, more than {MAX_SHRINK_OVER_R:.0%} of "
+            f"its smallest radius ({where}, {r * 1e3:.1f} mm), where the contact normal is "
+            "meaningless; use "
             "a less negative garment.ease (or a smaller dressing.margin)"
         )
 
