@@ -34,14 +34,14 @@ EXTREMES = ("f-maxcup-soft-heavy", "m-short-heavy-flabby-old", "m-tall-thin-unco
 #: the buttocks' rearmost point (ISO 8559-1), which all five now meet within 0.3 cm.
 MISSES = {
     "m-short-heavy-flabby-old": "knee −3.4 cm, "
-    "waist −2.6 cm, neck base −2.3 cm, neck girth +8.3 % (no neck between shoulders and double "
+    "waist −2.6 cm, neck base −1.9 cm, neck girth +6.2 % (no neck between shoulders and double "
     "chin)",
     "f-maxcup-soft-heavy": "under-bust +2.4 cm / −5.3 % (the breast's lower part leaves the "
-    "torso's outline 2.4 cm above the fold), shoulder +1.7 cm",
-    "m-tall-thin-uncommon": "thigh −1.7 cm, neck girth +2.7 %",
+    "torso's outline 2.4 cm above the fold)",
+    "m-tall-thin-uncommon": "thigh −1.7 cm, neck girth +2.9 % (height −0.5 cm × 5.5 %/cm)",
     "f-short-thin-teen": "calf +3.9 cm / +4.4 %, knee +3.6 cm / +8.4 %, under-bust +1.6 cm / "
-    "+4.5 %, bust +2.7 cm, shoulder +1.6 cm, neck girth +2.1 %",
-    "x-androgynous-heavy": "knee −2.4 cm / −5.6 %, thigh +1.8 cm, neck girth +3.7 %",
+    "+4.5 %, bust +2.7 cm, shoulder +2.8 cm",
+    "x-androgynous-heavy": "knee −2.4 cm / −5.6 %, thigh +1.8 cm, neck girth +5.8 %",
 }
 
 
@@ -123,3 +123,22 @@ def test_landmarks_of_extreme_bodies_against_references(name: str) -> None:
               + (f" girth {100 * row['dg']:+.2f} %" if "dg" in row else ""))  # fmt: skip
     bad = [(f.level, f.what) for f in lm.failures([record])]
     assert not bad, f"{name}: {bad}"
+
+
+@pytest.mark.slow  # one body analysed: 6–10 s
+def test_a_leg_s_centreline_takes_the_knee_and_calf_of_the_upright_body() -> None:
+    """The stocking is built on each leg's centreline (``limbs``), whose sharpest bend put the
+    knee 9.0 cm under MakeHuman's knee loop on the heavy man (and 5–11.6 cm on 7 more of the
+    37 bodies). Both legs' centreline knee and calf now lie at the heights found on the upright
+    body's sections, within the 1.5 cm target of the references (``benchmarks/landmarks.py``),
+    the right leg by its own sections."""
+    from fenics_garment.geometry.anatomy import analyse
+
+    V, T, v = lm.body_mesh(pop.by_name("m-heavy"))
+    ref = lm.references(V, T, v)
+    a = analyse(V, T)
+    for side in ("left", "right"):
+        leg = a.limbs[f"leg_{side}"]
+        for level in ("knee", "calf"):
+            z = float(np.ravel(leg.point(level))[2])
+            assert z == pytest.approx(ref[level]["z"], abs=lm.HEIGHT_TOL), (side, level)

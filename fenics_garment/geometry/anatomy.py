@@ -104,9 +104,10 @@ KNEECAP_MIN = 0.0006
 #: MakeHuman's thin or short women: no ISO 8559-1 calf, the maximum girth of the calf, below
 #: the knee) has its calf level this share of the way from the ankle to the knee: the median
 #: over the 31 bodies of MakeHuman's population that have a bulge (0.57–0.93; by this module's
-#: levels, ``benchmarks/landmarks.py``). On the 6 without one, MakeHuman's calf loop lies
-#: −1.4 to +1.9 cm from it and 4.5 cm on the 2.32 m tall thin woman (the widest girth under
-#: the knee, the rule before: 4–15 cm). The parametric mannequin's proportions
+#: levels, ``benchmarks/landmarks.py``). On the 5 without one, against MakeHuman's calf loop:
+#: +0.04, +0.54, +1.89 cm, and +3.85 and +4.48 cm where our knee is itself 3.6 and 1.8 cm off
+#: (the short thin girl, the 2.32 m tall thin woman); the widest girth under the knee, the rule
+#: before: +5.7 to +15.2 cm. The parametric mannequin's proportions
 #: (measurements.py: ankle 0.06, calf 0.205, knee 0.285 of the stature) give 0.644 too.
 CALF_SHARE = 0.644
 #: :func:`extreme`: a girth within this share of the narrowest (widest) ...
@@ -141,6 +142,10 @@ FLAT_UNDERBUST = 0.35
 #: The bust points are looked for within this share of the torso's width either side of its
 #: middle (MakeHuman's bodies: 0.26–0.37 at the bust points' level).
 BUST_REGION = 0.45
+#: the leg levels a leg's centreline takes from the upright body's sections (:func:`find_limbs`):
+#: the kneecap and the calf found there; on the centreline alone (its sharpest bend) the knee
+#: lay 5–11.6 cm under MakeHuman's knee loop on 8 of its 37 bodies (``benchmarks/landmarks.py``)
+LIMB_LEVELS = ("knee", "calf")
 #: landmark levels a scene may override (heights in metres above the floor)
 LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
@@ -328,14 +333,18 @@ def analyse(
     marks["neck"] = 0.5 * (marks["neck_base"] + narrow)  # mid-neck
     marks.update(torso_levels(girth, crotch, z_armpit, z_shoulder, H, front, bool(armpit)))
     marks.update(leg_levels(v, t, crotch, H))
+    right = leg_levels(v, t, crotch, H, side=-1.0)
     if overrides:
         marks.update(overrides)
+        right.update({k: z for k, z in overrides.items() if k in right})
     marks = {k: float(z) for k, z in marks.items()}
     check_order(marks)
     part = body_parts(v, t, marks, cut)
     girths = {k: girth(marks[k]) for k in TORSO_LEVELS if k in marks and k != "crotch"}
     sections = {k: torso_section(v, t, marks[k], cut, z_ap) for k in girths}
-    limbs, problems = find_limbs(v, t, part)
+    on_legs = {"leg_left": {k: marks[k] for k in LIMB_LEVELS},
+               "leg_right": {k: right[k] for k in LIMB_LEVELS}}  # fmt: skip
+    limbs, problems = find_limbs(v, t, part, on_legs)
     for name, limb in limbs.items():
         side = name.split("_")[1]
         for joint in ("elbow", "wrist", "knee", "ankle"):
@@ -345,10 +354,12 @@ def analyse(
 
 
 def find_limbs(
-    v: Array, t: IArray, part: npt.NDArray[np.int32]
-) -> tuple[dict[str, Limb], dict[str, str]]:
+    v: Array, t: IArray, part: npt.NDArray[np.int32],
+    heights: dict[str, dict[str, float]] | None = None,
+) -> tuple[dict[str, Limb], dict[str, str]]:  # fmt: skip
     """Every arm and leg followed along its centreline (:mod:`.limbs`), and the reason for
-    each one that could not be."""
+    each one that could not be; ``heights``: per limb, levels already found on the upright
+    body (:data:`LIMB_LEVELS` of each leg, :func:`leg_levels`) that its centreline takes over."""
     limbs, problems = {}, {}
     for name in ("arm_left", "arm_right", "leg_left", "leg_right"):
         mine = part == PARTS[name]
@@ -356,7 +367,7 @@ def find_limbs(
             problems[name] = f"no {name.replace('_', ' ')} was found on the body"
             continue
         try:
-            limbs[name] = analyse_limb(v, t, mine, name)
+            limbs[name] = analyse_limb(v, t, mine, name, (heights or {}).get(name))
         except ScanError as e:
             problems[name] = str(e)
     return limbs, problems
@@ -425,9 +436,10 @@ def acromion(
     corner, on the silhouette.
 
     On MakeHuman's 37 bodies against its acromion vertex (``benchmarks/landmarks.py``): within
-    1.5 cm on 35 (the corner alone is 1.3–4.2 cm low on the men, whose deltoids bulge beyond
-    the acromion; the top of the surface over the armpit point, the rule before, 1.5–2.6 cm
-    high on the women, whose armpit lies 1.5–2.5 cm medial of it). None if the arm's top
+    1.5 cm on 35, +2.0 and +2.8 cm on the two teenage girls (the corner alone is 1.3–4.2 cm low
+    on the men, whose deltoids bulge beyond the acromion; the top of the surface over the
+    armpit point, the rule before, 1.5–2.6 cm high on the women, whose armpit lies 1.5–2.5 cm
+    medial of it). None if the arm's top
     never comes down to the armpit's height within reach (a T-pose): the caller keeps the top
     over the armpit."""
     s, z = shoulder_silhouette(v, t, sgn, s_neck, z_armpit - 0.2 * H, z_neck, 0.0015 * H)
@@ -739,9 +751,9 @@ def narrowing_below(zs: Array, g: Array) -> float | None:
     return None
 
 
-def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]:
-    """Left leg (+x), from its horizontal sections every 0.5 % of the stature (tape girth and
-    front profile):
+def leg_levels(v: Array, t: IArray, crotch: float, H: float, side: float = 1.0) -> dict[str, float]:
+    """Left leg (+x; ``side`` −1: the right leg), from its horizontal sections every 0.5 % of
+    the stature (tape girth and front profile):
 
     * knee: the kneecap (:func:`kneecap`, ISO 8559-1 mid-patella), looked for from the widest
       girth under the proportional knee height :data:`~.limbs.KNEE_HEIGHT` × stature (above
@@ -765,10 +777,11 @@ def leg_levels(v: Array, t: IArray, crotch: float, H: float) -> dict[str, float]
     zl = np.arange(0.02 * H, crotch - 0.01 * H, 0.005 * H)
     leg, fwd = {}, {}
     for z in zl:
-        side = [o for o in outlines(v, t, z) if o.xmin > -0.02 and o.points[:, 0].mean() > 0]
-        if side:  # the largest: the leg, not a hand
-            leg[float(z)] = sec.tape_girth(side[0].points)
-            fwd[float(z)] = float(-side[0].points[:, 1].min())
+        mine = [o for o in outlines(v, t, z) if min(side * o.xmin, side * o.xmax) > -0.02
+                and side * o.points[:, 0].mean() > 0]  # fmt: skip
+        if mine:  # the largest: the leg, not a hand
+            leg[float(z)] = sec.tape_girth(mine[0].points)
+            fwd[float(z)] = float(-mine[0].points[:, 1].min())
     zk = sorted(leg)
 
     def within(lo: float, hi: float) -> Array:

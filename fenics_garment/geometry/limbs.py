@@ -350,19 +350,26 @@ def arm_marks(s: Array, c: Array, girth: Array, stature: float, name: str) -> di
 
 
 def leg_marks(
-    s: Array, c: Array, girth: Array, stature: float, name: str, top: float | None = None
-) -> dict[str, float]:
+    s: Array, c: Array, girth: Array, stature: float, name: str, top: float | None = None,
+    heights: dict[str, float] | None = None,
+) -> dict[str, float]:  # fmt: skip
     """Thigh, knee, calf, ankle of a leg (module doc, step 3). ``top``: the crown's height
-    above the floor (z = 0), for the knee's proportional height (default: ``stature``)."""
+    above the floor (z = 0), for the knee's proportional height (default: ``stature``);
+    ``heights``: knee and calf heights found on the upright body (``anatomy.leg_levels``),
+    taken as the stations at those heights."""
     L = s[-1]
     ankle = _pick(s, girth, 0.45 * L, 0.85 * L, np.nanargmin, "ankle (narrowest section)", name)
     if ankle >= s[s <= 0.85 * L][-1]:  # still narrowing at the window's end: a foot below?
         ankle = _footless_ankle(s, girth, ankle, name)
     root = _free_root(s, girth, name)
     span = ankle - root
-    knee = knee_on_the_leg(s, c, KNEE_HEIGHT * (stature if top is None else top), root, ankle)
-    calf = _pick(s, girth, knee + 0.04, root + 0.9 * span, np.nanargmax,
-                 "calf (widest section)", name)  # fmt: skip
+    given = heights or {}
+    z_knee = KNEE_HEIGHT * (stature if top is None else top)
+    knee = (station_at(s, c, given["knee"], root, ankle) if "knee" in given else
+            knee_on_the_leg(s, c, z_knee, root, ankle))  # fmt: skip
+    calf = (station_at(s, c, given["calf"], knee, ankle) if "calf" in given else
+            _pick(s, girth, knee + 0.04, root + 0.9 * span, np.nanargmax,
+                  "calf (widest section)", name))  # fmt: skip
     thigh = root + ROOT_CLEARANCE * stature
     if not thigh < knee:
         raise ScanError(f"{name}: the thigh level is not above the knee")
@@ -389,6 +396,15 @@ def _footless_ankle(s: Array, girth: Array, ankle: float, name: str) -> float:
     return far if not len(below) or below.max() <= (1 + FOOT_WIDENING) * g0 else ankle
 
 
+def station_at(s: Array, c: Array, z: float, lo: float, hi: float) -> float:
+    """The arc length of the centreline station nearest to height ``z`` strictly between the
+    arc lengths ``lo`` and ``hi`` (their middle if there is none)."""
+    inside = (s > lo) & (s < hi)
+    if not inside.any():
+        return float(0.5 * (lo + hi))
+    return float(s[np.flatnonzero(inside)[np.argmin(np.abs(c[inside, 2] - z))]])
+
+
 def knee_on_the_leg(s: Array, c: Array, z_knee: float, root: float, ankle: float) -> float:
     """The knee's arc length: the sharpest bend of the centreline within ``KNEE_WINDOW`` of the
     station at the proportional knee height ``z_knee``, if the leg bends there by at least
@@ -408,14 +424,18 @@ def knee_on_the_leg(s: Array, c: Array, z_knee: float, root: float, ankle: float
     return float(s[j] if ang[j] >= KNEE_BEND else s[i0])
 
 
-def analyse_limb(v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str) -> Limb:
-    """Centreline, girths, joints and level sections of one limb (module doc)."""
+def analyse_limb(
+    v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str,
+    heights: dict[str, float] | None = None,
+) -> Limb:  # fmt: skip
+    """Centreline, girths, joints and level sections of one limb (module doc); ``heights``:
+    a leg's levels found on the upright body (:func:`leg_marks`)."""
     s, c, tan, e1, e2, girth = centreline(v, t, mine)
     stature = float(np.ptp(v[:, 2]))
     if name.startswith("arm"):
         marks = arm_marks(s, c, girth, stature, name)
     else:
-        marks = leg_marks(s, c, girth, stature, name, top=float(v[:, 2].max()))
+        marks = leg_marks(s, c, girth, stature, name, top=float(v[:, 2].max()), heights=heights)
     lt = t[mine]
     limb = Limb(name, s, c, tan, e1, e2, girth, marks, vertices=v, triangles=lt)
     for level, sl in marks.items():
