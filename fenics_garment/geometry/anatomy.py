@@ -13,7 +13,9 @@ centred near x = 0), not from fixed fractions of the stature:
   chest wall jumps to the arm's outer side) and a T-pose (the chest jumps to the arm span);
   coming down from the arms instead is fooled by a T-pose's nearly horizontal arm underside.
   The armpit point is the torso outline's lateral extreme just below; the vertical plane
-  through it is the arm root (**arm cut**).
+  through it is the arm root (**arm cut**). Under a raised arm the jump comes where the web of
+  skin from the chest wall to the arm has flattened: the armpit is followed down the web to
+  the wall (``WEB_SLOPE``).
 * **Arms**: the triangles beyond the arm cut that are connected (beyond it) to the most
   lateral point on that side. **Legs**: the rest below the crotch, split at x = 0.
 * **Shoulder points** (acromions): on the shoulders' front silhouette, half-way across from
@@ -71,6 +73,22 @@ IArray = npt.NDArray[np.int64]
 
 #: lateral drop [m] between neighbouring sections that marks an arm leaving the torso
 ARM_JUMP = 0.02
+#: Under a raised arm (a T-pose) the skin runs from the chest wall out to the arm's underside
+#: as a sloping web, and the outline's jump (ARM_JUMP) comes only where the web has flattened:
+#: on MakeHuman's T-posed woman 2.9 cm above and 4.7 cm lateral of the skin point that was her
+#: armpit in the A-pose. Below the jump, the outline's lateral extent growing by more than this
+#: many times the height step (flatter than 45°: an underside rather than a wall) is still the
+#: web; the armpit is where the wall begins (our assumption; :func:`_arm_root`). Only under a
+#: raised arm: beside a hanging arm (an A-pose) the outline may widen as much over one section
+#: into the armpit's own fold (MakeHuman's short thin teenage girl: 5 mm, where the jump's
+#: armpit is within 0.03 mm of the reference, ``benchmarks/landmarks.py``).
+WEB_SLOPE = 1.0
+#: ... the arm hangs if it is beside the torso this far [fraction of the stature] under the
+#: armpit: a hanging upper arm (0.186 of the stature long, Drillis & Contini, see
+#: ACROMION_REACH; 47–49° below the horizontal in MakeHuman's A-pose, ``tests/test_rig.py``)
+#: reaches about 0.13 of the stature below its shoulder joint, a raised one's underside a few
+#: centimetres below the web
+ARM_HANG = 0.05
 #: girth ratio over the narrowest neck girth where the head (the chin's underside) begins: the
 #: narrowest girth lies just under the chin (MakeHuman's bodies: within 2 mm of the menton), and
 #: the girth grows there by 10 % within 5–8 mm (``benchmarks/landmarks.py``)
@@ -146,6 +164,13 @@ BUST_REGION = 0.45
 #: the kneecap and the calf found there; on the centreline alone (its sharpest bend) the knee
 #: lay 5–11.6 cm under MakeHuman's knee loop on 8 of its 37 bodies (``benchmarks/landmarks.py``)
 LIMB_LEVELS = ("knee", "calf")
+#: :func:`acromion`: the arm's top must come down to the armpit's height within this far
+#: [fraction of the stature] out from the armpit's side, the upper arm's length (0.186 of the
+#: stature, Drillis & Contini 1966, D. A. Winter, *Biomechanics and Motor Control of Human
+#: Movement*, 4th ed., Fig. 4.1): an A-posed arm does so before the elbow (MakeHuman's bodies:
+#: 0.064–0.074), a T-posed one only beyond it, at the hand (0.32; the corner of the arm's
+#: silhouette found there lay 15–20 cm out on the arm)
+ACROMION_REACH = 0.186
 #: landmark levels a scene may override (heights in metres above the floor)
 LANDMARKS = (*LEG_LEVELS, *TORSO_LEVELS, "armpit", "head")
 #: body parts, numbered per triangle in :attr:`Anatomy.part`
@@ -391,6 +416,13 @@ def _arm_root(
         k += 1
     if k not in ext or k - 1 not in ext:
         return None
+    j = k - 1  # down the web under a raised arm to the chest wall (WEB_SLOPE)
+    while j - 1 in ext and ext[j] - ext[j - 1] > WEB_SLOPE * (zs[j] - zs[j - 1]):
+        j -= 1
+    below = float(zs[k - 1]) - ARM_HANG * float(v[:, 2].max())
+    if j < k - 1 and not _arm_hangs(v, t, below, sgn, ext[k - 1]):
+        o = torso[j]
+        return float(zs[j]), o.points[np.argmax(sgn * o.points[:, 0])]
     thr = 0.5 * (ext[k - 1] + ext[k])
 
     def attached(z: float) -> bool:
@@ -402,6 +434,17 @@ def _arm_root(
     if o is None:
         return None
     return z_ap, o.points[np.argmax(sgn * o.points[:, 0])]
+
+
+def _arm_hangs(v: Array, t: IArray, z: float, sgn: float, reach: float) -> bool:
+    """Whether a piece of the section at ``z`` (:data:`ARM_HANG` under the armpit) lies wholly
+    beyond the torso's lateral extent ``reach`` on the side ``sgn`` and starts within an upper
+    arm's length of it (:data:`ACROMION_REACH`): an arm hanging beside the torso (an A-pose),
+    not a raised one (whose hand may droop below the armpit's height, 0.3 of the stature out,
+    and whose underside may sag a little below the web: the tall, heavy, muscular man's)."""
+    H = float(v[:, 2].max())
+    return any(reach < (sgn * p[:, 0]).min() < reach + ACROMION_REACH * H
+               for p in sec.slice_loops(v, t, z) if len(p) > 2)  # fmt: skip
 
 
 def shoulder_silhouette(
@@ -439,12 +482,11 @@ def acromion(
     1.5 cm on 35, +2.0 and +2.8 cm on the two teenage girls (the corner alone is 1.3–4.2 cm low
     on the men, whose deltoids bulge beyond the acromion; the top of the surface over the
     armpit point, the rule before, 1.5–2.6 cm high on the women, whose armpit lies 1.5–2.5 cm
-    medial of it). None if the arm's top
-    never comes down to the armpit's height within reach (a T-pose): the caller keeps the top
-    over the armpit."""
+    medial of it). None if the arm's top never comes down to the armpit's height within reach
+    (:data:`ACROMION_REACH`; a T-pose): the caller keeps the top over the armpit."""
     s, z = shoulder_silhouette(v, t, sgn, s_neck, z_armpit - 0.2 * H, z_neck, 0.0015 * H)
     low = np.flatnonzero(z <= z_armpit)
-    if len(s) < 5 or not len(low) or low[0] < 4:
+    if len(s) < 5 or not len(low) or low[0] < 4 or s[low[0]] > s_armpit + ACROMION_REACH * H:
         return None
     s, z = s[: low[0] + 1], z[: low[0] + 1]
     chord = z[0] + (s - s[0]) * (z[-1] - z[0]) / (s[-1] - s[0])

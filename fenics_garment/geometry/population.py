@@ -28,7 +28,9 @@ code). The targets are vendored in ``meshes/makehuman/targets/macro.npz.xz``: th
 child corners (no baby), dense over the 19,158 vertices of hm08, in MakeHuman's own storage
 unit (int16, 1e-3 of the base mesh's decimetre).
 
-:func:`population` is a set of bodies spanning every macro variable to its extremes;
+:func:`population` is a set of bodies spanning every macro variable to its extremes, all in
+MakeHuman's rest A-pose but four T-posed copies (:attr:`Body.pose`, :func:`posed_vertices`: the
+arms raised by MPFB2's CC0 game-engine rig, :mod:`.rig`);
 :func:`export` writes one as a scanner or body tool would: STL (binary or ascii), PLY (binary or
 ascii), OBJ (quads, with the eyes, as MakeHuman exports) or GLB, in mm, cm, m or inches, with
 any coordinate axis up.
@@ -47,6 +49,7 @@ from pathlib import Path
 import numpy as np
 import numpy.typing as npt
 
+from . import rig
 from .orientation import ROTATIONS, UNITS
 
 Array = npt.NDArray[np.float64]
@@ -179,6 +182,18 @@ def body_vertices(m: Macro) -> Array:
     return v
 
 
+def joint_centre(v_dm: Array, cube: str) -> Array:
+    """The centre of hm08's joint cube ``cube`` (the mean of its vertices) on the body ``v_dm``."""
+    return v_dm[np.unique(np.concatenate(base_mesh().groups[cube]))].mean(axis=0)
+
+
+def posed_vertices(m: Macro, pose: str = "A") -> Array:
+    """:func:`body_vertices` in ``pose``: "A" MakeHuman's rest pose, "T" the arms raised to
+    the horizontal by MPFB2's game-engine rig (:mod:`.rig`; the legs keep the rest stance)."""
+    v = body_vertices(m)
+    return rig.pose_vertices(v, lambda cube: joint_centre(v, cube), pose)
+
+
 def to_package_frame(v_dm: Array) -> Array:
     """MakeHuman's frame (dm, Y up, facing +z) to the package's (m, Z up, facing −y)."""
     return 0.1 * v_dm @ ROTATIONS["y"].T
@@ -196,6 +211,13 @@ class Body:
     #: the body turned about its vertical by this many degrees (counter-clockwise seen from
     #: above) before the up axis is laid: 0 faces −y with Z up and +z with Y up; 90 faces +x
     turn: int = 0
+    #: "A": MakeHuman's rest pose; "T": the arms raised to the horizontal (:mod:`.rig`)
+    pose: str = "A"
+
+    @property
+    def vertices(self) -> Array:
+        """All of hm08's vertices of this body in its pose (MakeHuman's frame, decimetres)."""
+        return posed_vertices(self.macro, self.pose)
 
     @property
     def file_name(self) -> str:
@@ -241,10 +263,17 @@ def _designs() -> list[tuple[str, Macro]]:
     return out
 
 
+#: the shapes that also come in a T-pose: a woman and a man, a heavy woman and the tall heavy
+#: muscular man (the widest arms), each with the format, units and up axis given here
+T_POSED = (("female", "obj", "cm", "y"), ("male", "ply", "mm", "-z"),
+           ("f-heavy", "glb", "m", "y"), ("m-tall-heavy-muscular", "stl", "in", "x"))  # fmt: skip
+
+
 def population() -> list[Body]:
-    """The bodies (37 shapes, 39 files), each with an export format, units and up axis: the
+    """The bodies (37 shapes, 43 files), each with an export format, units and up axis: the
     formats cycle fastest, then the units, and the up axis steps once per body against them,
-    so that every format meets every unit and every format several up axes."""
+    so that every format meets every unit and every format several up axes. Then two turned
+    copies and four T-posed copies (:data:`T_POSED`) of some of the shapes."""
     ups = ("y", "z", "-z", "x", "-y", "-x")
     units = ("mm", "cm", "m", "in")
     out = [Body(name, m, FORMATS[k % 6], units[(k // 6) % 4], ups[(k + k // 6) % 6])
@@ -252,8 +281,12 @@ def population() -> list[Body]:
     # a scanner's subject need not face the way the package expects (−y with Z up): the same
     # woman and man turned a quarter and a half turn (distinct files, not distinct shapes)
     f, m = Macro(gender=0.0), Macro(gender=1.0)
-    return [*out, Body("female-turned-180", f, "stl", "mm", "z", 180),
+    out += [Body("female-turned-180", f, "stl", "mm", "z", 180),
             Body("male-turned-90", m, "ply", "m", "z", 90)]  # fmt: skip
+    # scanners and body tools also take their subjects with the arms out (a T-pose)
+    shape = {b.name: b.macro for b in out}
+    return [*out, *(Body(f"{name}-t-pose", shape[name], fmt, units, up, pose="T")
+                     for name, fmt, units, up in T_POSED)]  # fmt: skip
 
 
 def by_name(name: str) -> Body:
@@ -276,7 +309,7 @@ def export(body: Body, folder: str | Path, *, fmt: str | None = None, units: str
     fmt, units, up = fmt or body.fmt, units or body.units, up or body.up
     c, s = np.cos(np.radians(body.turn)), np.sin(np.radians(body.turn))
     turn = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
-    v = to_package_frame(body_vertices(body.macro)) @ turn.T @ ROTATIONS[up] / UNITS[units]
+    v = to_package_frame(body.vertices) @ turn.T @ ROTATIONS[up] / UNITS[units]
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     stem = f"{body.name}-{fmt}-{units}-{up.replace('-', 'neg')}" if (fmt, units, up) != (

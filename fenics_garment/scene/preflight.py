@@ -435,32 +435,6 @@ def garment_resolution(built) -> None:
         )
 
 
-def self_crossing(built, depth: float) -> np.ndarray | None:
-    """A garment point the contact search takes as deeper than ``depth`` / 2 inside the body
-    whose generalised winding number (libigl; robust where the surface crosses itself) puts it
-    outside, or None (collective). The angle-weighted pseudonormal's sign is exact only on a
-    surface that does not cross itself: on MakeHuman's short, heavy, flabby old man, whose thigh
-    and calf overlap behind the knee, a point 10 cm behind the leg was taken as 105 mm inside."""
-    import igl
-
-    from fenics_garment.contact import pressure as cpressure
-    from fenics_garment.scene.dressing import unshrunk
-
-    with unshrunk(built.contact.state) as st:
-        x = cpressure.positions(st)[st.local_values(st.gap) <= -0.5 * depth]
-    b = built.body
-    if len(x):
-        x = x[:: max(len(x) // 50, 1)]  # at most about 50 of them
-        w = igl.winding_number(
-            np.asarray(b.vertices, np.float64),
-            np.asarray(b.triangles, np.int64),
-            np.asarray(x, np.float64),
-        )
-        x = x[np.abs(w) < 0.5]
-    found = built.model.geometry.mesh.comm.allgather(x[0] if len(x) else None)
-    return next((p for p in found if p is not None), None)
-
-
 def deepest_point(built) -> tuple[np.ndarray, str]:
     """Where the undeformed garment lies deepest inside the unshrunk body: the point (x, y, z)
     [m] and the garment's level nearest to it in height, "" without levels (collective)."""
@@ -483,15 +457,6 @@ def initial_depth(built, penetration0: float) -> None:
     r, where = smallest_body_radius(built)
     s0 = max(penetration0, 0.0) + sc.dressing.margin
     if s0 >= MAX_SHRINK_OVER_R * r:
-        p = self_crossing(built, penetration0)
-        if p is not None:
-            raise PreflightError(
-                f"{sc.source or sc.name}: the body's surface crosses itself: a garment point at "
-                f"({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m, which the winding number puts outside "
-                f"the body, is taken as {penetration0 * 1e3:.3g} mm inside it (e.g. thigh and "
-                "calf overlapping behind a knee); repair the body mesh (remove its "
-                "self-intersections) and run again"
-            )
         p, level = deepest_point(built)
         where_in = f" at ({p[0]:.3f}, {p[1]:.3f}, {p[2]:.3f}) m" + (
             f", near its level '{level}'" if level else ""
@@ -501,8 +466,7 @@ def initial_depth(built, penetration0: float) -> None:
             f"body{where_in}; with dressing.margin {sc.dressing.margin * 1e3:.3g} mm the body "
             f"would have to shrink by {s0 * 1e3:.3g} mm, more than {MAX_SHRINK_OVER_R:.0%} of "
             f"its smallest radius ({where}, {r * 1e3:.1f} mm), where the contact normal is "
-            "meaningless; use "
-            "a less negative garment.ease (or a smaller dressing.margin)"
+            "meaningless; use a less negative garment.ease (or a smaller dressing.margin)"
         )
 
 
