@@ -379,9 +379,8 @@ def analyse(
 
 
 def find_limbs(
-    v: Array, t: IArray, part: npt.NDArray[np.int32],
-    heights: dict[str, dict[str, float]] | None = None,
-) -> tuple[dict[str, Limb], dict[str, str]]:  # fmt: skip
+    v: Array, t: IArray, part: npt.NDArray[np.int32], heights: dict[str, dict[str, float]]
+) -> tuple[dict[str, Limb], dict[str, str]]:
     """Every arm and leg followed along its centreline (:mod:`.limbs`), and the reason for
     each one that could not be; ``heights``: per limb, levels already found on the upright
     body (:data:`LIMB_LEVELS` of each leg, :func:`leg_levels`) that its centreline takes over."""
@@ -392,7 +391,7 @@ def find_limbs(
             problems[name] = f"no {name.replace('_', ' ')} was found on the body"
             continue
         try:
-            limbs[name] = analyse_limb(v, t, mine, name, (heights or {}).get(name))
+            limbs[name] = analyse_limb(v, t, mine, name, heights.get(name))
         except ScanError as e:
             problems[name] = str(e)
     return limbs, problems

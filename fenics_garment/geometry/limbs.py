@@ -16,13 +16,13 @@ its arms 47° at the elbow):
 
    * elbow: the sharpest bend of the centreline (angle between chords ``BEND_CHORD`` behind
      and ahead) between 25 and 75 % of the way from the root to the wrist;
-   * knee: the sharpest bend within ``KNEE_WINDOW`` of the proportional knee height
-     (``KNEE_HEIGHT`` × stature), or that height on a leg that does not bend there
-     (:func:`knee_on_the_leg`);
+   * knee, calf: the stations at the heights found on the upright body's horizontal sections
+     (``anatomy.leg_levels``: the kneecap, the widest girth under it); the centreline's own
+     sharpest bend put the knee 5–11.6 cm under MakeHuman's knee loop on 8 of its 37
+     population bodies (the calf's bulge bends it as much as the knee);
    * wrist, ankle: the narrowest section before the hand (foot) widens — the minimum girth in
      the distal half of the arm (45–85 % of the leg): ISO 8559-1 measures wrist and ankle
      girths at their narrowest, just above the wrist bones / malleoli;
-   * calf: the widest section from 4 cm below the knee to 90 % of the way to the ankle;
    * forearm: half-way between elbow and wrist (the parametric arm's convention, 12 of 24 cm);
    * upper arm, thigh: ``ROOT_CLEARANCE`` × stature beyond the first station from which every
      section is the limb's own closed loop (clear of the torso; the thigh of the horizontal
@@ -69,10 +69,6 @@ SECTION_HARMONICS = 12
 #: Wiley 2009, fig. 4.1); MakeHuman's rig knee lies at 0.268 of its stature, the human
 #: mannequin's is built at 0.285 (measurements.Measurements.knee_height)
 KNEE_HEIGHT = 0.285
-#: the knee is looked for this far [m] along the leg from its proportional height (MakeHuman:
-#: 2.8 cm between the two), and is the sharpest bend there if the leg bends by this much [°]
-KNEE_WINDOW = 0.05
-KNEE_BEND = 5.0
 #: the landmark levels of each limb kind, tip to root
 ARM_MARKS = ("wrist", "forearm", "elbow", "upper_arm")
 LEG_MARKS = ("ankle", "calf", "knee", "thigh")
@@ -372,26 +368,17 @@ def arm_marks(s: Array, c: Array, girth: Array, stature: float, name: str) -> di
 
 
 def leg_marks(
-    s: Array, c: Array, girth: Array, stature: float, name: str, top: float | None = None,
-    heights: dict[str, float] | None = None,
-) -> dict[str, float]:  # fmt: skip
-    """Thigh, knee, calf, ankle of a leg (module doc, step 3). ``top``: the crown's height
-    above the floor (z = 0), for the knee's proportional height (default: ``stature``);
-    ``heights``: knee and calf heights found on the upright body (``anatomy.leg_levels``),
-    taken as the stations at those heights."""
+    s: Array, c: Array, girth: Array, stature: float, name: str, heights: dict[str, float]
+) -> dict[str, float]:
+    """Thigh, knee, calf, ankle of a leg (module doc, step 3); ``heights``: the knee and calf
+    heights found on the upright body (``anatomy.leg_levels``), taken as the stations there."""
     L = s[-1]
     ankle = _pick(s, girth, 0.45 * L, 0.85 * L, np.nanargmin, "ankle (narrowest section)", name)
     if ankle >= s[s <= 0.85 * L][-1]:  # still narrowing at the window's end: a foot below?
         ankle = _footless_ankle(s, girth, ankle, name)
     root = _free_root(s, girth, name)
-    span = ankle - root
-    given = heights or {}
-    z_knee = KNEE_HEIGHT * (stature if top is None else top)
-    knee = (station_at(s, c, given["knee"], root, ankle) if "knee" in given else
-            knee_on_the_leg(s, c, z_knee, root, ankle))  # fmt: skip
-    calf = (station_at(s, c, given["calf"], knee, ankle) if "calf" in given else
-            _pick(s, girth, knee + 0.04, root + 0.9 * span, np.nanargmax,
-                  "calf (widest section)", name))  # fmt: skip
+    knee = station_at(s, c, heights["knee"], root, ankle)
+    calf = station_at(s, c, heights["calf"], knee, ankle)
     thigh = root + ROOT_CLEARANCE * stature
     if not thigh < knee:
         raise ScanError(f"{name}: the thigh level is not above the knee")
@@ -427,37 +414,21 @@ def station_at(s: Array, c: Array, z: float, lo: float, hi: float) -> float:
     return float(s[np.flatnonzero(inside)[np.argmin(np.abs(c[inside, 2] - z))]])
 
 
-def knee_on_the_leg(s: Array, c: Array, z_knee: float, root: float, ankle: float) -> float:
-    """The knee's arc length: the sharpest bend of the centreline within ``KNEE_WINDOW`` of the
-    station at the proportional knee height ``z_knee``, if the leg bends there by at least
-    ``KNEE_BEND`` (a real leg); else that station (a straight lofted leg: nothing marks its
-    knee but the proportion).
-
-    The bend alone is not enough: the calf's bulge bends the centreline as much as the knee
-    does (MakeHuman: 14.7° at the calf, 13.5° at the knee), and a leg lofted straight through
-    its sections does not bend at all (the human mannequin: ≤ 2.6° along the whole leg)."""
-    inside = (s > root) & (s < ankle)
-    if not inside.any():
-        return float(0.5 * (root + ankle))
-    i0 = np.flatnonzero(inside)[np.argmin(np.abs(c[inside, 2] - z_knee))]
-    ang = bend(s, c)
-    near = np.flatnonzero(np.abs(s - s[i0]) <= KNEE_WINDOW)
-    j = near[np.argmax(ang[near])]
-    return float(s[j] if ang[j] >= KNEE_BEND else s[i0])
-
-
 def analyse_limb(
     v: Array, t: IArray, mine: npt.NDArray[np.bool_], name: str,
     heights: dict[str, float] | None = None,
 ) -> Limb:  # fmt: skip
     """Centreline, girths, joints and level sections of one limb (module doc); ``heights``:
-    a leg's levels found on the upright body (:func:`leg_marks`)."""
+    a leg's knee and calf heights found on the upright body (:func:`leg_marks`; required for
+    a leg)."""
     s, c, tan, e1, e2, girth = centreline(v, t, mine)
     stature = float(np.ptp(v[:, 2]))
     if name.startswith("arm"):
         marks = arm_marks(s, c, girth, stature, name)
     else:
-        marks = leg_marks(s, c, girth, stature, name, top=float(v[:, 2].max()), heights=heights)
+        if heights is None:
+            raise ValueError(f"{name}: a leg's knee and calf heights are required")
+        marks = leg_marks(s, c, girth, stature, name, heights)
     lt = t[mine]
     limb = Limb(name, s, c, tan, e1, e2, girth, marks, vertices=v, triangles=lt)
     for level, sl in marks.items():
